@@ -1,0 +1,60 @@
+#include "cache/curve_key.h"
+
+#include <climits>
+#include <cmath>
+#include <cstdio>
+
+namespace gonogo::cache {
+
+namespace {
+double Snap(double value, double resolution) { return std::round(value / resolution) * resolution; }
+
+std::string Fixed(double value, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
+  return buf;
+}
+}  // namespace
+
+int ConeIndexBin(double cone_index_pa) {
+  if (cone_index_pa <= 0) return INT_MIN;
+  return static_cast<int>(std::lround(std::log(cone_index_pa / 1000.0) / std::log(kConeIndexBinRatio)));
+}
+
+double ConeIndexOfBin(int bin) {
+  if (bin == INT_MIN) return 0.0;
+  // Rounded to 0.01 Pa so that the representative value prints identically everywhere.
+  return Snap(1000.0 * std::pow(kConeIndexBinRatio, bin), 0.01);
+}
+
+TractionRequest Quantise(const TractionRequest& r) {
+  TractionRequest q = r;
+  q.soil.cone_index_pa = ConeIndexOfBin(ConeIndexBin(r.soil.cone_index_pa));
+  q.tyre.diameter_m = Snap(r.tyre.diameter_m, kLengthResolutionM);
+  q.tyre.width_m = Snap(r.tyre.width_m, kLengthResolutionM);
+  q.tyre.section_height_m = Snap(r.tyre.section_height_m, kLengthResolutionM);
+  q.tyre.deflection_m = Snap(r.tyre.deflection_m, kLengthResolutionM);
+  // The rolling radius is always stored explicitly, so "derived" and "given" requests share keys.
+  q.tyre.rolling_radius_m = Snap(r.tyre.RollingRadius(), kLengthResolutionM);
+  q.wheel_load_n = Snap(r.wheel_load_n, kLoadResolutionN);
+  for (double& s : q.slips) s = Snap(s, kSlipResolution);
+  return q;
+}
+
+std::string CurveKey(const std::string& tier, const std::string& tier_version,
+                     const TractionRequest& q) {
+  std::string key = std::string(kCurveKeyVersion) + ";tier=" + tier + ";version=" + tier_version +
+                    ";soil=" + q.soil.soil_name + ";ci_pa=" + Fixed(q.soil.cone_index_pa, 2) +
+                    ";d_m=" + Fixed(q.tyre.diameter_m, 4) + ";b_m=" + Fixed(q.tyre.width_m, 4) +
+                    ";h_m=" + Fixed(q.tyre.section_height_m, 4) +
+                    ";delta_m=" + Fixed(q.tyre.deflection_m, 4) +
+                    ";r_m=" + Fixed(q.tyre.rolling_radius_m, 4) +
+                    ";w_n=" + Fixed(q.wheel_load_n, 0) + ";slips=";
+  for (size_t i = 0; i < q.slips.size(); ++i) {
+    if (i) key += ',';
+    key += Fixed(q.slips[i], 6);
+  }
+  return key;
+}
+
+}  // namespace gonogo::cache

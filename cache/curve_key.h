@@ -1,0 +1,31 @@
+// Canonical, quantised, versioned keys for traction curves (ARCHITECTURE section 6).
+//
+// A request is first snapped to the key's resolution and then computed with the snapped values, so a
+// cached curve is exactly the curve of its key: cone index on logarithmic bins 1 % apart, lengths to
+// 0.1 mm, wheel load to 1 N, slips to 1e-6. The tier's version is part of the key, so a solver change
+// never serves a stale curve.
+#pragma once
+
+#include <string>
+
+#include "solvers/common/traction.h"
+
+namespace gonogo::cache {
+
+inline constexpr char kCurveKeyVersion[] = "gonogo-curve-v1";
+inline constexpr double kConeIndexBinRatio = 1.01;   // adjacent cone-index bins differ by 1 %
+inline constexpr double kLengthResolutionM = 1e-4;   // 0.1 mm
+inline constexpr double kLoadResolutionN = 1.0;
+inline constexpr double kSlipResolution = 1e-6;
+
+// Bin of a cone index (Pa). Bin 0 is 1 kPa; INT32_MIN stands for a cone index of exactly 0.
+int ConeIndexBin(double cone_index_pa);
+// The representative cone index (Pa) of a bin.
+double ConeIndexOfBin(int bin);
+// Snaps every field of the request to the key's resolution.
+TractionRequest Quantise(const TractionRequest& request);
+// Key of an already quantised request.
+std::string CurveKey(const std::string& tier, const std::string& tier_version,
+                     const TractionRequest& quantised);
+
+}  // namespace gonogo::cache

@@ -1,0 +1,115 @@
+#include "cache/curve_store.h"
+
+#include <cstring>
+
+namespace gonogo::cache {
+
+namespace {
+
+// Points are stored as a packed array of doubles, kFields per point, in TractionPoint's field order.
+constexpr int kFields = 7;
+
+std::string PackPoints(const std::vector<TractionPoint>& points) {
+  std::vector<double> flat;
+  flat.reserve(points.size() * kFields);
+  for (const TractionPoint& p : points) {
+    flat.insert(flat.end(), {p.slip, p.drawbar_pull_n, p.torque_nm, p.sinkage_m,
+                             p.tractive_efficiency, p.gross_traction_n, p.motion_resistance_n});
+  }
+  return std::string(reinterpret_cast<const char*>(flat.data()), flat.size() * sizeof(double));
+}
+
+std::vector<TractionPoint> UnpackPoints(const std::string& blob) {
+  const size_t n = blob.size() / (kFields * sizeof(double));
+  std::vector<double> flat(n * kFields);
+  std::memcpy(flat.data(), blob.data(), flat.size() * sizeof(double));
+  std::vector<TractionPoint> points(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double* f = &flat[i * kFields];
+    points[i] = TractionPoint{f[0], f[1], f[2], f[3], f[4], f[5], f[6]};
+  }
+  return points;
+}
+
+constexpr char kColumns[] =
+    "id, cache_key, tier, tier_version, soil_name, cone_index_pa, diameter_m, width_m, "
+    "section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, computed_by, "
+    "compute_seconds, computed_unix_ms";
+
+StoredCurve ReadRow(const Statement& s) {
+  StoredCurve c;
+  c.cache_key = s.Text(1);
+  c.curve.tier = s.Text(2);
+  c.curve.tier_version = s.Text(3);
+  c.request.soil.soil_name = s.Text(4);
+  c.request.soil.cone_index_pa = s.Double(5);
+  c.request.tyre = TyreGeometry{s.Double(6), s.Double(7), s.Double(8), s.Double(9), s.Double(10)};
+  c.request.wheel_load_n = s.Double(11);
+  c.curve.points = UnpackPoints(s.Blob(12));
+  for (const TractionPoint& p : c.curve.points) c.request.slips.push_back(p.slip);
+  c.computed_by = s.Text(13);
+  c.compute_seconds = s.Double(14);
+  c.computed_unix_ms = s.Int(15);
+  return c;
+}
+
+}  // namespace
+
+std::optional<StoredCurve> CurveStore::Find(const std::string& key) {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare(std::string("SELECT ") + kColumns + " FROM curves WHERE cache_key = ?");
+  s.Bind(1, key);
+  if (!s.Step()) return std::nullopt;
+  return ReadRow(s);
+}
+
+bool CurveStore::Put(const StoredCurve& c) {
+  WriteTransaction tx(db_);
+  Statement s = db_.Prepare(
+      "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
+      "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
+      "computed_by, compute_seconds, computed_unix_ms) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+  const std::string blob = PackPoints(c.curve.points);
+  s.Bind(1, c.cache_key).Bind(2, c.curve.tier).Bind(3, c.curve.tier_version);
+  s.Bind(4, c.request.soil.soil_name).Bind(5, c.request.soil.cone_index_pa);
+  s.Bind(6, c.request.tyre.diameter_m).Bind(7, c.request.tyre.width_m);
+  s.Bind(8, c.request.tyre.section_height_m).Bind(9, c.request.tyre.deflection_m);
+  s.Bind(10, c.request.tyre.RollingRadius()).Bind(11, c.request.wheel_load_n);
+  s.BindBlob(12, blob.data(), blob.size());
+  s.Bind(13, c.computed_by).Bind(14, c.compute_seconds).Bind(15, c.computed_unix_ms);
+  s.Run();
+  const bool written = db_.Changes() > 0;
+  tx.Commit();
+  return written;
+}
+
+CurvePage CurveStore::List(const CurveFilter& f, int page_size, int64_t before_id) {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare(
+      std::string("SELECT ") + kColumns +
+      " FROM curves WHERE (?1 = '' OR tier = ?1) AND (?2 = '' OR soil_name = ?2)"
+      " AND (?3 <= 0 OR cone_index_pa >= ?3) AND (?4 <= 0 OR cone_index_pa <= ?4)"
+      " AND (?5 <= 0 OR id < ?5) ORDER BY id DESC LIMIT ?6");
+  s.Bind(1, f.tier).Bind(2, f.soil_name).Bind(3, f.min_cone_index_pa).Bind(4, f.max_cone_index_pa);
+  s.Bind(5, before_id).Bind(6, static_cast<int64_t>(page_size + 1));
+  CurvePage page;
+  int64_t last_id = 0;
+  while (s.Step()) {
+    if (static_cast<int>(page.curves.size()) == page_size) {
+      page.next_after_id = last_id;
+      break;
+    }
+    page.curves.push_back(ReadRow(s));
+    last_id = s.Int(0);
+  }
+  return page;
+}
+
+int64_t CurveStore::Count() {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare("SELECT COUNT(*) FROM curves");
+  s.Step();
+  return s.Int(0);
+}
+
+}  // namespace gonogo::cache

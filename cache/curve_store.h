@@ -1,0 +1,52 @@
+// The traction-curve cache: one SQLite row per curve, committed as soon as it arrives (a crash loses no
+// finished curve). Rank 0 is the only writer.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cache/database.h"
+#include "solvers/common/traction.h"
+
+namespace gonogo::cache {
+
+struct StoredCurve {
+  std::string cache_key;
+  TractionRequest request;       // quantised request the curve answers
+  TractionCurve curve;
+  std::string computed_by;       // "rank N" or "thread"
+  double compute_seconds = 0;    // solver wall time, s
+  int64_t computed_unix_ms = 0;
+};
+
+struct CurveFilter {
+  std::string tier;              // empty: any
+  std::string soil_name;         // empty: any
+  double min_cone_index_pa = 0;  // 0: unbounded
+  double max_cone_index_pa = 0;  // 0: unbounded
+};
+
+struct CurvePage {
+  std::vector<StoredCurve> curves;
+  int64_t next_after_id = 0;     // 0 on the last page
+};
+
+class CurveStore {
+ public:
+  explicit CurveStore(Database& db) : db_(db) {}
+
+  std::optional<StoredCurve> Find(const std::string& cache_key);
+  // Inserts the curve in its own transaction; a curve already stored under the key is kept.
+  // Returns true when a row was written.
+  bool Put(const StoredCurve& curve);
+  // Newest first; `before_id` 0 starts at the newest.
+  CurvePage List(const CurveFilter& filter, int page_size, int64_t before_id);
+  int64_t Count();
+
+ private:
+  Database& db_;
+};
+
+}  // namespace gonogo::cache

@@ -1,0 +1,181 @@
+#include "cache/database.h"
+
+#include <vector>
+
+namespace gonogo::cache {
+
+namespace {
+
+// Schema migrations, applied in order inside one BEGIN IMMEDIATE transaction each. Entry i takes the
+// database from user_version i to i + 1. Never edit a shipped entry: append a new one.
+const std::vector<std::string>& Migrations() {
+  static const std::vector<std::string> kMigrations = {
+      // 0 -> 1: traction curves and jobs.
+      R"sql(
+      CREATE TABLE curves (
+        id INTEGER PRIMARY KEY,
+        cache_key TEXT NOT NULL UNIQUE,
+        tier TEXT NOT NULL,
+        tier_version TEXT NOT NULL,
+        soil_name TEXT NOT NULL,
+        cone_index_pa REAL NOT NULL,
+        diameter_m REAL NOT NULL,
+        width_m REAL NOT NULL,
+        section_height_m REAL NOT NULL,
+        deflection_m REAL NOT NULL,
+        rolling_radius_m REAL NOT NULL,
+        wheel_load_n REAL NOT NULL,
+        points BLOB NOT NULL,
+        computed_by TEXT NOT NULL,
+        compute_seconds REAL NOT NULL,
+        computed_unix_ms INTEGER NOT NULL
+      );
+      CREATE INDEX curves_by_tier ON curves (tier, soil_name, cone_index_pa);
+      CREATE TABLE jobs (
+        id TEXT PRIMARY KEY,
+        name TEXT NOT NULL,
+        tier TEXT NOT NULL,
+        state INTEGER NOT NULL,
+        fraction_done REAL NOT NULL DEFAULT 0,
+        tasks_done INTEGER NOT NULL DEFAULT 0,
+        tasks_total INTEGER NOT NULL DEFAULT 0,
+        cache_hits INTEGER NOT NULL DEFAULT 0,
+        message TEXT NOT NULL DEFAULT '',
+        request BLOB NOT NULL,
+        summary_json TEXT NOT NULL DEFAULT '',
+        products TEXT NOT NULL DEFAULT '',
+        created_unix_ms INTEGER NOT NULL,
+        finished_unix_ms INTEGER NOT NULL DEFAULT 0
+      );
+      CREATE INDEX jobs_by_state ON jobs (state);
+      )sql",
+  };
+  return kMigrations;
+}
+
+void Check(sqlite3* db, int rc, const std::string& what) {
+  if (rc != SQLITE_OK && rc != SQLITE_DONE && rc != SQLITE_ROW) {
+    throw DatabaseError(what + ": " + sqlite3_errmsg(db));
+  }
+}
+
+}  // namespace
+
+Statement::Statement(sqlite3* db, const std::string& sql) : db_(db) {
+  Check(db_, sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt_, nullptr), "prepare");
+}
+Statement::~Statement() { sqlite3_finalize(stmt_); }
+
+Statement& Statement::Bind(int i, int64_t v) {
+  Check(db_, sqlite3_bind_int64(stmt_, i, v), "bind");
+  return *this;
+}
+Statement& Statement::Bind(int i, double v) {
+  Check(db_, sqlite3_bind_double(stmt_, i, v), "bind");
+  return *this;
+}
+Statement& Statement::Bind(int i, const std::string& t) {
+  Check(db_, sqlite3_bind_text(stmt_, i, t.data(), static_cast<int>(t.size()), SQLITE_TRANSIENT),
+        "bind");
+  return *this;
+}
+Statement& Statement::BindBlob(int i, const void* data, size_t bytes) {
+  Check(db_, sqlite3_bind_blob(stmt_, i, data, static_cast<int>(bytes), SQLITE_TRANSIENT), "bind");
+  return *this;
+}
+Statement& Statement::BindNull(int i) {
+  Check(db_, sqlite3_bind_null(stmt_, i), "bind");
+  return *this;
+}
+
+bool Statement::Step() {
+  const int rc = sqlite3_step(stmt_);
+  Check(db_, rc, "step");
+  return rc == SQLITE_ROW;
+}
+void Statement::Run() {
+  while (Step()) {
+  }
+}
+
+int64_t Statement::Int(int c) const { return sqlite3_column_int64(stmt_, c); }
+double Statement::Double(int c) const { return sqlite3_column_double(stmt_, c); }
+std::string Statement::Text(int c) const {
+  const auto* p = sqlite3_column_text(stmt_, c);
+  return p ? std::string(reinterpret_cast<const char*>(p), sqlite3_column_bytes(stmt_, c)) : "";
+}
+std::string Statement::Blob(int c) const {
+  const void* p = sqlite3_column_blob(stmt_, c);
+  return p ? std::string(static_cast<const char*>(p), sqlite3_column_bytes(stmt_, c)) : "";
+}
+bool Statement::IsNull(int c) const { return sqlite3_column_type(stmt_, c) == SQLITE_NULL; }
+
+Database::Database(const std::string& path) : path_(path) {
+  const int rc = sqlite3_open_v2(path.c_str(), &db_,
+                                 SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                                 nullptr);
+  if (rc != SQLITE_OK) {
+    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    throw DatabaseError("cannot open " + path + ": " + msg);
+  }
+  sqlite3_busy_timeout(db_, 10000);
+  Exec("PRAGMA journal_mode=WAL");
+  // NORMAL is durable across application crashes in WAL mode; only power loss can drop the last commits.
+  Exec("PRAGMA synchronous=NORMAL");
+  Exec("PRAGMA foreign_keys=ON");
+  Migrate();
+}
+
+Database::~Database() { sqlite3_close(db_); }
+
+void Database::Exec(const std::string& sql) {
+  std::lock_guard<std::recursive_mutex> lock(mutex_);
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw DatabaseError(msg);
+  }
+}
+
+int Database::SchemaVersion() {
+  std::lock_guard<std::recursive_mutex> lock(mutex_);
+  Statement s(db_, "PRAGMA user_version");
+  s.Step();
+  return static_cast<int>(s.Int(0));
+}
+
+void Database::Migrate() {
+  const int known = static_cast<int>(Migrations().size());
+  WriteTransaction tx(*this);
+  const int version = SchemaVersion();
+  if (version > known) {
+    throw DatabaseError(path_ + " has schema version " + std::to_string(version) +
+                        ", newer than this gonogo (" + std::to_string(known) +
+                        "); refusing to open it");
+  }
+  for (int v = version; v < known; ++v) {
+    Exec(Migrations()[v]);
+    Exec("PRAGMA user_version=" + std::to_string(v + 1));
+  }
+  tx.Commit();
+}
+
+WriteTransaction::WriteTransaction(Database& db) : db_(db), lock_(db.mutex()) {
+  db_.Exec("BEGIN IMMEDIATE");
+}
+WriteTransaction::~WriteTransaction() {
+  if (!done_) {
+    try {
+      db_.Exec("ROLLBACK");
+    } catch (...) {
+    }
+  }
+}
+void WriteTransaction::Commit() {
+  db_.Exec("COMMIT");
+  done_ = true;
+}
+
+}  // namespace gonogo::cache

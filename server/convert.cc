@@ -1,0 +1,135 @@
+#include "server/convert.h"
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::server {
+
+TyreGeometry FromProto(const v1::Tyre& t) {
+  return TyreGeometry{t.diameter_m(), t.width_m(), t.section_height_m(), t.deflection_m(),
+                      t.rolling_radius_m()};
+}
+
+v1::Tyre ToProto(const TyreGeometry& t) {
+  v1::Tyre p;
+  p.set_diameter_m(t.diameter_m);
+  p.set_width_m(t.width_m);
+  p.set_section_height_m(t.section_height_m);
+  p.set_deflection_m(t.deflection_m);
+  p.set_rolling_radius_m(t.rolling_radius_m);
+  return p;
+}
+
+TractionPoint FromProto(const v1::TractionPoint& p) {
+  return TractionPoint{p.slip(),         p.drawbar_pull_n(),   p.torque_nm(),
+                       p.sinkage_m(),    p.tractive_efficiency(), p.gross_traction_n(),
+                       p.motion_resistance_n()};
+}
+
+v1::TractionPoint ToProto(const TractionPoint& p) {
+  v1::TractionPoint q;
+  q.set_slip(p.slip);
+  q.set_drawbar_pull_n(p.drawbar_pull_n);
+  q.set_torque_nm(p.torque_nm);
+  q.set_sinkage_m(p.sinkage_m);
+  q.set_tractive_efficiency(p.tractive_efficiency);
+  q.set_gross_traction_n(p.gross_traction_n);
+  q.set_motion_resistance_n(p.motion_resistance_n);
+  return q;
+}
+
+mobility::VehicleSpec VehicleFromProto(const v1::Vehicle& p) {
+  mobility::VehicleSpec v;
+  v.name = p.name();
+  v.mass_kg = p.mass_kg();
+  bool fractions_given = false;
+  for (const v1::Axle& a : p.axles()) {
+    mobility::AxleSpec axle;
+    axle.load_fraction = a.load_fraction();
+    axle.wheels = static_cast<int>(a.wheels());
+    Require(a.has_tyre(), "vehicle.axles[" + std::to_string(v.axles.size()) + "].tyre",
+            "is missing");
+    axle.tyre = FromProto(a.tyre());
+    axle.driven = a.driven();
+    fractions_given = fractions_given || axle.load_fraction != 0;
+    v.axles.push_back(axle);
+  }
+  if (!fractions_given && !v.axles.empty()) {
+    mobility::SetTwoAxleSplitFromCg(v, p.cg_behind_front_axle_m(), p.wheelbase_m());
+  }
+  v.drive_power_w = p.drive_power_w();
+  v.max_speed_kmh = p.max_speed_kmh();
+  v.driveline_efficiency =
+      p.driveline_efficiency() == 0 ? mobility::kDefaultDrivelineEfficiency : p.driveline_efficiency();
+  v.ground_clearance_m = p.ground_clearance_m();
+  v.automatic_transmission = p.automatic_transmission();
+  v.tyre_chains = p.tyre_chains();
+  v.Validate();
+  return v;
+}
+
+mobility::Criteria CriteriaFromProto(const v1::Criteria& p) {
+  mobility::Criteria c;
+  if (p.design_slip() != 0) c.design_slip = p.design_slip();
+  if (p.max_slip() != 0) c.max_slip = p.max_slip();
+  if (p.go_margin() != 0) c.go_margin = p.go_margin();
+  if (p.passes() != 0) c.passes = static_cast<int>(p.passes());
+  if (p.slip_step() != 0) c.slip_step = p.slip_step();
+  c.Validate();
+  return c;
+}
+
+v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
+  v1::WorkerTask w;
+  w.set_task_id(t.task_id);
+  w.set_debug_delay_ms(t.debug_delay_ms);
+  v1::GetTractionCurveRequest* r = w.mutable_request();
+  r->set_tier(t.tier);
+  *r->mutable_tyre() = ToProto(t.request.tyre);
+  r->set_wheel_load_n(t.request.wheel_load_n);
+  r->mutable_soil()->set_cone_index_pa(t.request.soil.cone_index_pa);
+  r->mutable_soil()->set_soil_name(t.request.soil.soil_name);
+  for (double s : t.request.slips) w.add_slips(s);
+  return w;
+}
+
+TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
+  TaskSpec t;
+  t.task_id = w.task_id();
+  t.debug_delay_ms = w.debug_delay_ms();
+  t.tier = w.request().tier();
+  t.request.tyre = FromProto(w.request().tyre());
+  t.request.wheel_load_n = w.request().wheel_load_n();
+  t.request.soil.cone_index_pa = w.request().soil().cone_index_pa();
+  t.request.soil.soil_name = w.request().soil().soil_name();
+  t.request.slips.assign(w.slips().begin(), w.slips().end());
+  return t;
+}
+
+v1::WorkerResult ToWorkerResult(const TaskResult& r) {
+  v1::WorkerResult w;
+  w.set_task_id(r.task_id);
+  w.set_ok(r.ok);
+  w.set_cancelled(r.cancelled);
+  w.set_error(r.error);
+  w.set_tier_version(r.curve.tier_version);
+  w.set_compute_seconds(r.compute_seconds);
+  for (const TractionPoint& p : r.curve.points) *w.add_points() = ToProto(p);
+  return w;
+}
+
+TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
+                            const std::string& computed_by) {
+  TaskResult r;
+  r.task_id = w.task_id();
+  r.ok = w.ok();
+  r.cancelled = w.cancelled();
+  r.error = w.error();
+  r.curve.tier = tier;
+  r.curve.tier_version = w.tier_version();
+  for (const auto& p : w.points()) r.curve.points.push_back(FromProto(p));
+  r.computed_by = computed_by;
+  r.compute_seconds = w.compute_seconds();
+  return r;
+}
+
+}  // namespace gonogo::server

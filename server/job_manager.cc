@@ -1,0 +1,466 @@
+#include "server/job_manager.h"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "cache/curve_key.h"
+#include "server/convert.h"
+#include "server/geo/products.h"
+#include "server/map_plan.h"
+#include "server/summary.h"
+#include "solvers/common/errors.h"
+#include "solvers/mobility/soft_soil.h"
+
+namespace gonogo::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int64_t NowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::optional<geo::RasterInput> OptionalRaster(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  return geo::RasterInput{ReadFile(path)};
+}
+
+v1::JobStatus StatusOf(const cache::JobRecord& j) {
+  v1::JobStatus s;
+  s.set_job_id(j.id);
+  s.set_state(static_cast<v1::JobState>(j.state));
+  s.set_fraction_done(j.fraction_done);
+  s.set_tasks_done(static_cast<uint32_t>(j.tasks_done));
+  s.set_tasks_total(static_cast<uint32_t>(j.tasks_total));
+  s.set_cache_hits(static_cast<uint32_t>(j.cache_hits));
+  s.set_message(j.message);
+  return s;
+}
+
+v1::Job JobOf(const cache::JobRecord& j) {
+  v1::Job out;
+  out.set_job_id(j.id);
+  out.set_name(j.name);
+  out.set_tier(j.tier);
+  *out.mutable_status() = StatusOf(j);
+  out.set_created_unix_ms(j.created_unix_ms);
+  out.set_finished_unix_ms(j.finished_unix_ms);
+  for (const auto& p : j.products) out.add_products(p);
+  out.set_summary_json(j.summary_json);
+  return out;
+}
+
+std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
+  std::map<int32_t, SoilClassInfo> out;
+  for (int i = 0; i < table.classes_size(); ++i) {
+    const v1::SoilClass& c = table.classes(i);
+    const std::string field = "soil_table.classes[" + std::to_string(i) + "]";
+    Require(!out.count(c.code()), field + ".code", "code " + std::to_string(c.code()) + " repeats");
+    const double ri = c.remolding_index() == 0 ? 1.0 : c.remolding_index();
+    Require(std::isfinite(ri) && ri > 0 && ri <= 2, field + ".remolding_index",
+            "must lie in (0, 2]");
+    out[c.code()] = SoilClassInfo{c.name(), ri};
+  }
+  return out;
+}
+
+// Results of one job's tasks, filled by pool threads and drained by the scheduler thread. Shared, so
+// that late callbacks after the job returned land harmlessly.
+struct Inbox {
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::deque<TaskResult> results;
+};
+
+}  // namespace
+
+struct JobManager::Live {
+  v1::JobStatus status;
+  uint64_t version = 1;
+  std::atomic<bool> cancel_requested{false};
+  std::shared_ptr<geo::TerrainLayers> terrain;
+};
+
+JobManager::JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
+                       WorkerPool& pool)
+    : config_(std::move(config)), db_(db), jobs_(db), curves_(db), tiers_(tiers), pool_(pool) {
+  fs::create_directories(fs::path(config_.data_dir) / "jobs");
+}
+
+JobManager::~JobManager() { Drain(); }
+
+std::string JobManager::NewJobId() const {
+  static thread_local std::mt19937_64 rng(std::random_device{}());
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "job-%012llx",
+                static_cast<unsigned long long>(rng() & 0xffffffffffffULL));
+  return buf;
+}
+
+std::string JobManager::JobDir(const std::string& id) const {
+  return (fs::path(config_.data_dir) / "jobs" / id).string();
+}
+
+JobInputs JobManager::InputsOf(const std::string& id) const {
+  JobInputs in;
+  const fs::path dir = fs::path(JobDir(id)) / "inputs";
+  auto pick = [&](const char* name) {
+    const fs::path p = dir / name;
+    return fs::exists(p) ? p.string() : std::string();
+  };
+  in.cone_index = pick("cone_index.tif");
+  in.slope = pick("slope.tif");
+  in.elevation = pick("elevation.tif");
+  in.soil_class = pick("soil_class.tif");
+  return in;
+}
+
+std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& request,
+                                                         const JobInputs& inputs) const {
+  Require(request.has_vehicle(), "vehicle", "is missing");
+  const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
+  CriteriaFromProto(request.criteria());
+  Require(!request.tier().empty(), "tier", "is missing");
+  tiers_.Get(request.tier());
+  Require(!inputs.cone_index.empty(), "cone_index", "the cone-index raster is required");
+  Require(inputs.slope.empty() != inputs.elevation.empty(), "slope",
+          "send exactly one of a slope raster or an elevation raster");
+  Require(inputs.soil_class.empty() || request.soil_table().classes_size() > 0, "soil_table",
+          "is required with a soil-class raster");
+  const auto soil_table = SoilTableOf(request.soil_table());
+
+  geo::TerrainInputs t;
+  t.cone_index.bytes = ReadFile(inputs.cone_index);
+  t.slope = OptionalRaster(inputs.slope);
+  t.elevation = OptionalRaster(inputs.elevation);
+  t.soil_class = OptionalRaster(inputs.soil_class);
+  auto terrain = std::make_shared<geo::TerrainLayers>(geo::LoadTerrain(t, config_.limits));
+  if (!terrain->soil_class.empty()) {
+    for (size_t c = 0; c < terrain->soil_class.size(); ++c) {
+      if (terrain->valid[c] && !soil_table.count(terrain->soil_class[c])) {
+        throw InputError("soil_class", "class code " + std::to_string(terrain->soil_class[c]) +
+                                           " at row " + std::to_string(c / terrain->grid.width) +
+                                           " col " + std::to_string(c % terrain->grid.width) +
+                                           " is not in the soil table");
+      }
+    }
+  }
+  return terrain;
+}
+
+v1::Job JobManager::Submit(const std::string& id, const v1::MapRequest& request,
+                           const JobInputs&, std::shared_ptr<geo::TerrainLayers> terrain) {
+  cache::JobRecord rec;
+  rec.id = id;
+  rec.name = request.name();
+  rec.tier = request.tier();
+  rec.state = cache::JobState::kQueued;
+  rec.message = "queued";
+  rec.request = request.SerializeAsString();
+  rec.created_unix_ms = NowMs();
+  jobs_.Create(rec);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto live = std::make_shared<Live>();
+    live->status = StatusOf(rec);
+    live->terrain = std::move(terrain);
+    live_[id] = live;
+    queue_.push_back(id);
+  }
+  changed_.notify_all();
+  return JobOf(rec);
+}
+
+int JobManager::ResumeUnfinished() {
+  int n = 0;
+  for (const cache::JobRecord& rec : jobs_.Unfinished()) {
+    jobs_.SetState(rec.id, cache::JobState::kQueued, "resumed after a restart");
+    cache::JobRecord queued = rec;
+    queued.state = cache::JobState::kQueued;
+    queued.message = "resumed after a restart";
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto live = std::make_shared<Live>();
+    live->status = StatusOf(queued);
+    live_[rec.id] = live;
+    queue_.push_back(rec.id);
+    ++n;
+  }
+  return n;
+}
+
+void JobManager::Start() {
+  thread_ = std::thread([this] { Loop(); });
+}
+
+void JobManager::Drain() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void JobManager::Loop() {
+  for (;;) {
+    std::string id;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      id = queue_.front();
+      queue_.pop_front();
+    }
+    RunJob(id);
+  }
+}
+
+void JobManager::Publish(const std::string& id, const v1::JobStatus& status) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = live_.find(id);
+    if (it == live_.end()) return;
+    it->second->status = status;
+    it->second->version++;
+  }
+  changed_.notify_all();
+}
+
+std::optional<v1::Job> JobManager::GetJob(const std::string& id) {
+  auto rec = jobs_.Get(id);
+  if (!rec) return std::nullopt;
+  v1::Job job = JobOf(*rec);
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = live_.find(id);
+  if (it != live_.end() && !cache::IsTerminal(rec->state)) *job.mutable_status() = it->second->status;
+  return job;
+}
+
+std::vector<v1::Job> JobManager::ListJobs(int limit) {
+  std::vector<v1::Job> out;
+  for (const auto& rec : jobs_.List(limit)) {
+    v1::Job job = JobOf(rec);
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = live_.find(rec.id);
+    if (it != live_.end() && !cache::IsTerminal(rec.state)) *job.mutable_status() = it->second->status;
+    out.push_back(std::move(job));
+  }
+  return out;
+}
+
+v1::Job JobManager::Cancel(const std::string& id) {
+  auto rec = jobs_.Get(id);
+  Require(rec.has_value(), "job_id", "no job '" + id + "'");
+  if (cache::IsTerminal(rec->state)) return *GetJob(id);
+  bool queued = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = live_.find(id);
+    if (it != live_.end()) it->second->cancel_requested = true;
+    auto q = std::find(queue_.begin(), queue_.end(), id);
+    if (q != queue_.end()) {
+      queue_.erase(q);
+      queued = true;
+    }
+  }
+  if (queued) {
+    jobs_.Finish(id, cache::JobState::kCancelled, "cancelled before it started", "", {}, NowMs());
+    auto after = jobs_.Get(id);
+    Publish(id, StatusOf(*after));
+  }
+  changed_.notify_all();
+  return *GetJob(id);
+}
+
+std::optional<std::pair<v1::JobStatus, uint64_t>> JobManager::WaitStatus(const std::string& id,
+                                                                         uint64_t seen,
+                                                                         int timeout_ms) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    auto it = live_.find(id);
+    if (it != live_.end()) {
+      auto live = it->second;
+      changed_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
+                        [&] { return live->version != seen || stopping_; });
+      return std::make_pair(live->status, live->version);
+    }
+  }
+  auto rec = jobs_.Get(id);
+  if (!rec) return std::nullopt;
+  return std::make_pair(StatusOf(*rec), uint64_t{1});
+}
+
+void JobManager::RunJob(const std::string& id) {
+  auto rec = jobs_.Get(id);
+  std::shared_ptr<Live> live;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    live = live_[id];
+    if (!live) live = live_[id] = std::make_shared<Live>();
+  }
+  if (!rec || cache::IsTerminal(rec->state)) return;
+
+  const auto started = std::chrono::steady_clock::now();
+  v1::JobStatus status = StatusOf(*rec);
+  auto report = [&](const std::string& message, bool persist) {
+    status.set_state(v1::JOB_STATE_RUNNING);
+    status.set_message(message);
+    Publish(id, status);
+    if (persist) {
+      jobs_.SetProgress(id, {status.fraction_done(), status.tasks_done(), status.tasks_total(),
+                             status.cache_hits(), message});
+    }
+  };
+  auto finish = [&](cache::JobState state, const std::string& message, const std::string& summary,
+                    const std::vector<std::string>& products) {
+    jobs_.Finish(id, state, message, summary, products, NowMs());
+    Publish(id, StatusOf(*jobs_.Get(id)));
+    std::lock_guard<std::mutex> lock(mutex_);
+    live_.erase(id);  // watchers read ended jobs from the database
+  };
+
+  try {
+    jobs_.SetState(id, cache::JobState::kRunning, "loading terrain");
+    report("loading terrain", false);
+    v1::MapRequest request;
+    Require(request.ParseFromString(rec->request), "request", "stored request is unreadable");
+    std::shared_ptr<geo::TerrainLayers> terrain = std::move(live->terrain);
+    if (!terrain) terrain = Validate(request, InputsOf(id));
+    const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
+    const mobility::Criteria criteria = CriteriaFromProto(request.criteria());
+    const TractionTier& tier = tiers_.Get(request.tier());
+    const auto slips = TractionRequest::SlipSweep(criteria.slip_step);
+
+    report("planning terrain units", false);
+    const MapPlan plan = PlanMap(*terrain, vehicle, SoilTableOf(request.soil_table()), tier, slips);
+    const size_t total = plan.tasks.size();
+    std::vector<TractionCurve> curves(total);
+    std::vector<bool> resolved(total, false);
+    size_t done = 0, hits = 0;
+    for (size_t i = 0; i < total; ++i) {
+      if (auto found = curves_.Find(plan.task_keys[i])) {
+        curves[i] = found->curve;
+        resolved[i] = true;
+        ++done;
+        ++hits;
+      }
+    }
+    status.set_tasks_total(static_cast<uint32_t>(total));
+    status.set_tasks_done(static_cast<uint32_t>(done));
+    status.set_cache_hits(static_cast<uint32_t>(hits));
+    status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
+    report(std::to_string(plan.units.size()) + " terrain units, " + std::to_string(total) +
+               " traction tasks, " + std::to_string(hits) + " from the cache",
+           true);
+
+    // Dispatch the misses.
+    auto inbox = std::make_shared<Inbox>();
+    std::map<uint64_t, size_t> outstanding;  // pool task id -> task index
+    for (size_t i = 0; i < total; ++i) {
+      if (resolved[i]) continue;
+      TaskSpec spec{next_task_id_++, tier.Name(), plan.tasks[i], config_.task_delay_ms};
+      outstanding[spec.task_id] = i;
+      pool_.Submit(std::move(spec), [inbox](TaskResult r) {
+        std::lock_guard<std::mutex> lock(inbox->mutex);
+        inbox->results.push_back(std::move(r));
+        inbox->arrived.notify_one();
+      });
+    }
+
+    std::map<std::string, int64_t> computed_by;
+    std::string failure;
+    bool cancels_sent = false;
+    auto last_persist = std::chrono::steady_clock::now();
+    while (!outstanding.empty()) {
+      std::deque<TaskResult> batch;
+      {
+        std::unique_lock<std::mutex> lock(inbox->mutex);
+        inbox->arrived.wait_for(lock, std::chrono::milliseconds(200),
+                                [&] { return !inbox->results.empty(); });
+        batch.swap(inbox->results);
+      }
+      for (TaskResult& r : batch) {
+        auto it = outstanding.find(r.task_id);
+        if (it == outstanding.end()) continue;
+        const size_t i = it->second;
+        outstanding.erase(it);
+        if (r.ok) {
+          r.curve.tier = tier.Name();
+          cache::StoredCurve stored{plan.task_keys[i], plan.tasks[i], r.curve, r.computed_by,
+                                    r.compute_seconds, NowMs()};
+          curves_.Put(stored);  // committed now: a crash loses no finished curve
+          curves[i] = std::move(r.curve);
+          resolved[i] = true;
+          computed_by[r.computed_by]++;
+          ++done;
+        } else if (!r.cancelled && failure.empty()) {
+          failure = "traction task failed (" + tier.Name() + ", cone index " +
+                    std::to_string(plan.tasks[i].soil.cone_index_pa) + " Pa): " + r.error;
+        }
+      }
+      bool stopping;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stopping = stopping_;
+      }
+      if ((stopping || live->cancel_requested || !failure.empty()) && !cancels_sent) {
+        for (const auto& [task_id, _] : outstanding) pool_.Cancel(task_id);
+        cancels_sent = true;
+      }
+      status.set_tasks_done(static_cast<uint32_t>(done));
+      status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
+      const bool persist = std::chrono::steady_clock::now() - last_persist > std::chrono::milliseconds(250);
+      if (persist) last_persist = std::chrono::steady_clock::now();
+      report("computing traction curves: " + std::to_string(done) + "/" + std::to_string(total),
+             persist);
+    }
+
+    bool stopping;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping = stopping_;
+    }
+    if (live->cancel_requested) return finish(cache::JobState::kCancelled, "cancelled", "", {});
+    if (!failure.empty()) return finish(cache::JobState::kFailed, failure, "", {});
+    if (stopping) {
+      jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
+      return;
+    }
+
+    report("evaluating cells", true);
+    const double vci_pa =
+        tier.Name() == "empirical" ? mobility::VehicleConeIndexPa(vehicle, criteria.passes) : 0.0;
+    const MapVerdicts verdicts = EvaluateMap(plan, *terrain, vehicle, criteria, curves, vci_pa);
+
+    report("writing products", false);
+    const fs::path out_dir = fs::path(JobDir(id)) / "out";
+    fs::create_directories(out_dir);
+    SummaryInputs si{id, request, tier.Name(), tier.Version(), pool_.Describe(), plan, *terrain,
+                     verdicts, total, total - hits, hits, computed_by, vci_pa, criteria,
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};
+    const std::string summary = BuildSummaryJson(si);
+    geo::WriteMapProducts(terrain->grid, verdicts.go_class, verdicts.speed_kmh,
+                          ProductMetadata(si), out_dir.string());
+    std::ofstream(out_dir / "summary.json") << summary << "\n";
+    status.set_fraction_done(1.0);
+    finish(cache::JobState::kDone, "done", summary,
+           {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"});
+  } catch (const std::exception& e) {
+    finish(cache::JobState::kFailed, e.what(), "", {});
+  }
+}
+
+}  // namespace gonogo::server

@@ -1,0 +1,100 @@
+// Map jobs on rank 0: persistence, the scheduler thread, progress for watchers, cancellation, resume
+// after a restart and draining on SIGTERM (ARCHITECTURE sections 2 and 5).
+//
+// One scheduler thread runs jobs in submission order. For each job it plans the traction tasks (one per
+// terrain unit and axle), answers what it can from the cache, sends the rest to the worker pool,
+// commits every finished curve to SQLite as it arrives, then evaluates every cell and writes the
+// products. gRPC handlers only enqueue and read status; they never wait for a solver.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "cache/curve_store.h"
+#include "cache/database.h"
+#include "cache/job_store.h"
+#include "gonogo/v1/mobility.pb.h"
+#include "server/geo/terrain.h"
+#include "server/worker_pool.h"
+#include "solvers/common/tier.h"
+
+namespace gonogo::server {
+
+struct JobManagerConfig {
+  std::string data_dir;
+  uint32_t task_delay_ms = 0;   // fault-injection delay added to every task (tests, demos)
+  geo::GeoLimits limits;
+};
+
+// Paths of a job's stored input rasters (empty when not sent).
+struct JobInputs {
+  std::string cone_index, slope, elevation, soil_class;
+};
+
+class JobManager {
+ public:
+  JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
+             WorkerPool& pool);
+  ~JobManager();
+
+  // Directory for a new job's inputs, and a fresh job id.
+  std::string NewJobId() const;
+  std::string JobDir(const std::string& job_id) const;
+
+  // Validates everything a job needs before it is accepted: vehicle, criteria, tier, soil table and
+  // the rasters themselves. Throws InputError / LimitError naming the field. Returns the loaded
+  // terrain so that the job does not read it twice.
+  std::shared_ptr<geo::TerrainLayers> Validate(const v1::MapRequest& request,
+                                               const JobInputs& inputs) const;
+  // Persists the job (QUEUED) and queues it. `terrain` may be null (it is then read from the inputs).
+  v1::Job Submit(const std::string& job_id, const v1::MapRequest& request, const JobInputs& inputs,
+                 std::shared_ptr<geo::TerrainLayers> terrain);
+  // Re-queues the jobs a previous run left QUEUED or RUNNING. Call once, before Start().
+  int ResumeUnfinished();
+  void Start();
+  // Stops the scheduler: the running job's outstanding tasks are cancelled and the job goes back to
+  // QUEUED, so the next start resumes it; finished curves are already committed.
+  void Drain();
+
+  std::optional<v1::Job> GetJob(const std::string& job_id);
+  std::vector<v1::Job> ListJobs(int limit);
+  // Throws InputError("job_id") when unknown; returns the job after the request.
+  v1::Job Cancel(const std::string& job_id);
+  // Waits until the job's status changes from `seen_version` or `timeout_ms` passes; returns the
+  // current status and its version. Unknown job: nullopt.
+  std::optional<std::pair<v1::JobStatus, uint64_t>> WaitStatus(const std::string& job_id,
+                                                               uint64_t seen_version,
+                                                               int timeout_ms);
+
+ private:
+  struct Live;  // in-memory state of a queued or running job
+  void Loop();
+  void RunJob(const std::string& job_id);
+  void Publish(const std::string& job_id, const v1::JobStatus& status);
+  JobInputs InputsOf(const std::string& job_id) const;
+
+  JobManagerConfig config_;
+  cache::Database& db_;
+  cache::JobStore jobs_;
+  cache::CurveStore curves_;
+  const TierRegistry& tiers_;
+  WorkerPool& pool_;
+
+  std::mutex mutex_;
+  std::condition_variable changed_;     // any job status changed, or a job was queued
+  std::deque<std::string> queue_;
+  std::map<std::string, std::shared_ptr<Live>> live_;
+  bool stopping_ = false;
+  std::thread thread_;
+  std::atomic<uint64_t> next_task_id_{1};
+};
+
+}  // namespace gonogo::server

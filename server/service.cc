@@ -1,0 +1,306 @@
+#include "server/service.h"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <future>
+
+#include "cache/curve_key.h"
+#include "server/convert.h"
+#include "solvers/common/errors.h"
+
+namespace gonogo::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr size_t kChunkBytes = 1 << 20;
+
+const char* RoleFileName(v1::RasterRole role) {
+  switch (role) {
+    case v1::RASTER_ROLE_CONE_INDEX: return "cone_index.tif";
+    case v1::RASTER_ROLE_SLOPE: return "slope.tif";
+    case v1::RASTER_ROLE_ELEVATION: return "elevation.tif";
+    case v1::RASTER_ROLE_SOIL_CLASS: return "soil_class.tif";
+    default: return nullptr;
+  }
+}
+
+void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
+  *out->mutable_tyre() = ToProto(s.request.tyre);
+  out->set_wheel_load_n(s.request.wheel_load_n);
+  out->mutable_soil()->set_cone_index_pa(s.request.soil.cone_index_pa);
+  out->mutable_soil()->set_soil_name(s.request.soil.soil_name);
+  for (const TractionPoint& p : s.curve.points) *out->add_points() = ToProto(p);
+  v1::Provenance* prov = out->mutable_provenance();
+  prov->set_tier(s.curve.tier);
+  prov->set_tier_version(s.curve.tier_version);
+  prov->set_cache_key(s.cache_key);
+  prov->set_cache_hit(hit);
+  prov->set_computed_by(s.computed_by);
+  prov->set_compute_seconds(s.compute_seconds);
+  prov->set_computed_unix_ms(s.computed_unix_ms);
+}
+
+int64_t NowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+grpc::Status ToStatus(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const InputError& e) {
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
+  } catch (const LimitError& e) {
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
+  } catch (const cache::DatabaseError& e) {
+    return grpc::Status(grpc::StatusCode::INTERNAL, std::string("database: ") + e.what());
+  } catch (const std::exception& e) {
+    return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
+  }
+}
+
+MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
+                                         const TierRegistry& tiers, WorkerPool& pool,
+                                         ServiceLimits limits)
+    : jobs_(jobs), curves_(db), tiers_(tiers), pool_(pool), limits_(limits) {}
+
+grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
+                                            grpc::ServerReader<v1::SubmitMapRequest>* reader,
+                                            v1::Job* response) {
+  if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+  const std::string id = jobs_.NewJobId();
+  const fs::path inputs_dir = fs::path(jobs_.JobDir(id)) / "inputs";
+  // Whatever happens before the job is persisted, its directory is removed again.
+  struct Cleanup {
+    fs::path dir;
+    bool keep = false;
+    ~Cleanup() {
+      std::error_code ec;
+      if (!keep) fs::remove_all(dir, ec);
+    }
+  } cleanup{fs::path(jobs_.JobDir(id))};
+  try {
+    v1::SubmitMapRequest message;
+    Require(reader->Read(&message) && message.has_request(), "request",
+            "the first message must carry the MapRequest");
+    const v1::MapRequest request = message.request();
+    fs::create_directories(inputs_dir);
+    std::map<v1::RasterRole, std::ofstream> files;
+    JobInputs inputs;
+    int64_t received = 0;
+    while (reader->Read(&message)) {
+      Require(message.has_chunk(), "request", "only the first message may carry the MapRequest");
+      const char* name = RoleFileName(message.chunk().role());
+      Require(name != nullptr, "chunk.role", "unknown raster role");
+      received += static_cast<int64_t>(message.chunk().data().size());
+      if (received > limits_.max_upload_bytes) {
+        throw LimitError("rasters", "upload exceeds the limit of " +
+                                        std::to_string(limits_.max_upload_bytes) + " bytes");
+      }
+      auto& out = files[message.chunk().role()];
+      if (!out.is_open()) out.open(inputs_dir / name, std::ios::binary);
+      out.write(message.chunk().data().data(),
+                static_cast<std::streamsize>(message.chunk().data().size()));
+    }
+    for (auto& [role, stream] : files) {
+      stream.close();
+      const std::string path = (inputs_dir / RoleFileName(role)).string();
+      switch (role) {
+        case v1::RASTER_ROLE_CONE_INDEX: inputs.cone_index = path; break;
+        case v1::RASTER_ROLE_SLOPE: inputs.slope = path; break;
+        case v1::RASTER_ROLE_ELEVATION: inputs.elevation = path; break;
+        case v1::RASTER_ROLE_SOIL_CLASS: inputs.soil_class = path; break;
+        default: break;
+      }
+    }
+    auto terrain = jobs_.Validate(request, inputs);
+    *response = jobs_.Submit(id, request, inputs, std::move(terrain));
+    cleanup.keep = true;
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::WatchJob(grpc::ServerContext* context,
+                                           const v1::WatchJobRequest* request,
+                                           grpc::ServerWriter<v1::JobStatus>* writer) {
+  uint64_t seen = 0;
+  while (!context->IsCancelled()) {
+    auto status = jobs_.WaitStatus(request->job_id(), seen, 500);
+    if (!status) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
+    if (status->second != seen) {
+      seen = status->second;
+      if (!writer->Write(status->first)) return grpc::Status::OK;
+    }
+    const auto state = status->first.state();
+    if (state == v1::JOB_STATE_DONE || state == v1::JOB_STATE_FAILED ||
+        state == v1::JOB_STATE_CANCELLED) {
+      return grpc::Status::OK;
+    }
+  }
+  return grpc::Status::CANCELLED;
+}
+
+grpc::Status MobilityServiceImpl::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+                                         v1::Job* response) {
+  try {
+    auto job = jobs_.GetJob(request->job_id());
+    if (!job) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
+    *response = *job;
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+                                           v1::ListJobsResponse* response) {
+  try {
+    const int limit = request->limit() == 0 ? 50 : static_cast<int>(std::min(request->limit(), 1000u));
+    for (auto& job : jobs_.ListJobs(limit)) *response->add_jobs() = std::move(job);
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::CancelJob(grpc::ServerContext*,
+                                            const v1::CancelJobRequest* request,
+                                            v1::Job* response) {
+  try {
+    auto before = jobs_.GetJob(request->job_id());
+    if (!before) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
+    const auto state = before->status().state();
+    if (state == v1::JOB_STATE_DONE || state == v1::JOB_STATE_FAILED ||
+        state == v1::JOB_STATE_CANCELLED) {
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              "job_id: job '" + request->job_id() + "' has already ended"};
+    }
+    *response = jobs_.Cancel(request->job_id());
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
+                                                 const v1::DownloadResultRequest* request,
+                                                 grpc::ServerWriter<v1::ResultChunk>* writer) {
+  auto job = jobs_.GetJob(request->job_id());
+  if (!job) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
+  if (job->status().state() != v1::JOB_STATE_DONE) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, "job_id: job has no products until it is DONE"};
+  }
+  std::vector<std::string> wanted;
+  for (const auto& p : job->products()) {
+    if (request->product().empty() || request->product() == p) wanted.push_back(p);
+  }
+  if (wanted.empty()) {
+    return {grpc::StatusCode::NOT_FOUND, "product: job has no product '" + request->product() + "'"};
+  }
+  std::string buffer(kChunkBytes, '\0');
+  for (const std::string& name : wanted) {
+    const fs::path path = fs::path(jobs_.JobDir(request->job_id())) / "out" / name;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return {grpc::StatusCode::INTERNAL, "product " + name + " is missing on the server"};
+    const uint64_t total = fs::file_size(path);
+    uint64_t offset = 0;
+    do {
+      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      const auto n = static_cast<size_t>(in.gcount());
+      v1::ResultChunk chunk;
+      chunk.set_product(name);
+      chunk.set_offset(offset);
+      chunk.set_total_bytes(total);
+      chunk.set_data(buffer.data(), n);
+      if (context->IsCancelled() || !writer->Write(chunk)) return grpc::Status::CANCELLED;
+      offset += n;
+    } while (offset < total);
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
+                                                   const v1::GetTractionCurveRequest* request,
+                                                   v1::TractionCurve* response) {
+  try {
+    if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+    Require(!request->tier().empty(), "tier", "is missing");
+    const TractionTier& tier = tiers_.Get(request->tier());
+    Require(request->has_tyre(), "tyre", "is missing");
+    TractionRequest r;
+    r.tyre = FromProto(request->tyre());
+    r.wheel_load_n = request->wheel_load_n();
+    r.soil.cone_index_pa = request->soil().cone_index_pa();
+    r.soil.soil_name = tier.UsesSoilName() ? request->soil().soil_name() : "";
+    r.slips = TractionRequest::SlipSweep(request->slip_step() == 0 ? 0.05 : request->slip_step());
+    r.Validate();
+    const TractionRequest q = cache::Quantise(r);
+    const std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
+    if (auto found = curves_.Find(key)) {
+      FillCurve(*found, true, response);
+      return grpc::Status::OK;
+    }
+    // Not cached: the pool computes it; this handler waits on the answer, not on the solver.
+    auto promise = std::make_shared<std::promise<TaskResult>>();
+    auto future = promise->get_future();
+    const uint64_t task_id = next_task_id_++;
+    pool_.Submit(TaskSpec{task_id, tier.Name(), q, 0},
+                 [promise](TaskResult result) { promise->set_value(std::move(result)); });
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::milliseconds(limits_.curve_timeout_ms);
+    while (future.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      if (context->IsCancelled() || std::chrono::steady_clock::now() > deadline) {
+        pool_.Cancel(task_id);
+        return {grpc::StatusCode::DEADLINE_EXCEEDED, "the traction curve was not ready in time"};
+      }
+    }
+    TaskResult result = future.get();
+    if (!result.ok) {
+      return {result.cancelled ? grpc::StatusCode::UNAVAILABLE : grpc::StatusCode::INVALID_ARGUMENT,
+              result.error};
+    }
+    result.curve.tier = tier.Name();
+    cache::StoredCurve stored{key, q, result.curve, result.computed_by, result.compute_seconds,
+                              NowMs()};
+    curves_.Put(stored);
+    FillCurve(stored, false, response);
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext*,
+                                                     const v1::ListTractionCurvesRequest* request,
+                                                     v1::ListTractionCurvesResponse* response) {
+  try {
+    int64_t before = 0;
+    if (!request->page_token().empty()) {
+      try {
+        before = std::stoll(request->page_token());
+      } catch (...) {
+        throw InputError("page_token", "is not a token returned by this service");
+      }
+    }
+    const int page_size =
+        request->page_size() == 0 ? 50 : static_cast<int>(std::min(request->page_size(), 1000u));
+    cache::CurveFilter filter{request->tier(), request->soil_name(), request->min_cone_index_pa(),
+                              request->max_cone_index_pa()};
+    const cache::CurvePage page = curves_.List(filter, page_size, before);
+    for (const auto& c : page.curves) FillCurve(c, true, response->add_curves());
+    if (page.next_after_id) response->set_next_page_token(std::to_string(page.next_after_id));
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+}  // namespace gonogo::server

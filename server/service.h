@@ -1,0 +1,59 @@
+// The gRPC MobilityService. Handlers validate, persist and read; solver work goes to the worker pool
+// through the JobManager, never onto a handler thread. Errors are mapped to gRPC codes in one place
+// (ToStatus).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "cache/curve_store.h"
+#include "gonogo/v1/mobility.grpc.pb.h"
+#include "server/job_manager.h"
+#include "server/worker_pool.h"
+#include "solvers/common/tier.h"
+
+namespace gonogo::server {
+
+struct ServiceLimits {
+  int64_t max_upload_bytes = 512LL << 20;  // all rasters of one job together
+  int curve_timeout_ms = 60000;            // GetTractionCurve's wait for the pool
+};
+
+// Maps exceptions thrown by validation and storage to gRPC statuses.
+grpc::Status ToStatus(const std::exception_ptr& error);
+
+class MobilityServiceImpl final : public v1::MobilityService::Service {
+ public:
+  MobilityServiceImpl(JobManager& jobs, cache::Database& db, const TierRegistry& tiers,
+                      WorkerPool& pool, ServiceLimits limits);
+
+  // While draining, new work is refused with UNAVAILABLE.
+  void SetDraining() { draining_ = true; }
+
+  grpc::Status SubmitMap(grpc::ServerContext*, grpc::ServerReader<v1::SubmitMapRequest>*,
+                         v1::Job*) override;
+  grpc::Status WatchJob(grpc::ServerContext*, const v1::WatchJobRequest*,
+                        grpc::ServerWriter<v1::JobStatus>*) override;
+  grpc::Status GetJob(grpc::ServerContext*, const v1::GetJobRequest*, v1::Job*) override;
+  grpc::Status ListJobs(grpc::ServerContext*, const v1::ListJobsRequest*,
+                        v1::ListJobsResponse*) override;
+  grpc::Status CancelJob(grpc::ServerContext*, const v1::CancelJobRequest*, v1::Job*) override;
+  grpc::Status DownloadResult(grpc::ServerContext*, const v1::DownloadResultRequest*,
+                              grpc::ServerWriter<v1::ResultChunk>*) override;
+  grpc::Status GetTractionCurve(grpc::ServerContext*, const v1::GetTractionCurveRequest*,
+                                v1::TractionCurve*) override;
+  grpc::Status ListTractionCurves(grpc::ServerContext*, const v1::ListTractionCurvesRequest*,
+                                  v1::ListTractionCurvesResponse*) override;
+
+ private:
+  JobManager& jobs_;
+  cache::CurveStore curves_;
+  const TierRegistry& tiers_;
+  WorkerPool& pool_;
+  ServiceLimits limits_;
+  std::atomic<bool> draining_{false};
+  std::atomic<uint64_t> next_task_id_{1ULL << 62};  // distinct from the job manager's ids
+};
+
+}  // namespace gonogo::server

@@ -1,0 +1,127 @@
+#include "server/summary.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+namespace gonogo::server {
+
+using nlohmann::json;
+
+std::string VehicleHash(const v1::Vehicle& vehicle) {
+  std::string bytes;
+  vehicle.SerializeToString(&bytes);
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+namespace {
+
+json CriteriaJson(const mobility::Criteria& c) {
+  return {{"design_slip", c.design_slip}, {"max_slip", c.max_slip}, {"go_margin", c.go_margin},
+          {"passes", c.passes},           {"slip_step", c.slip_step}};
+}
+
+double Round(double v, double step) { return std::round(v / step) * step; }
+
+}  // namespace
+
+std::string BuildSummaryJson(const SummaryInputs& in) {
+  const geo::Grid& grid = in.terrain.grid;
+  // Cells and areas per class; cell areas vary by row in a geographic CRS.
+  int64_t cells[3] = {0, 0, 0}, no_data = 0;
+  double area_m2[3] = {0, 0, 0};
+  double speed_sum_all = 0, speed_sum_mobile = 0;
+  for (int row = 0; row < grid.height; ++row) {
+    const double cell_area = grid.CellAreaM2(row);
+    for (int col = 0; col < grid.width; ++col) {
+      const size_t c = static_cast<size_t>(row) * grid.width + col;
+      const uint8_t k = in.verdicts.go_class[c];
+      if (k > 2) {
+        ++no_data;
+        continue;
+      }
+      cells[k]++;
+      area_m2[k] += cell_area;
+      speed_sum_all += in.verdicts.speed_kmh[c];
+      if (k > 0) speed_sum_mobile += in.verdicts.speed_kmh[c];
+    }
+  }
+  const int64_t valid = cells[0] + cells[1] + cells[2];
+  const double valid_area = area_m2[0] + area_m2[1] + area_m2[2];
+  const char* names[3] = {"NO-GO", "SLOW-GO", "GO"};
+  json classes = json::object();
+  for (int k = 2; k >= 0; --k) {
+    classes[names[k]] = {{"code", k},
+                         {"cells", cells[k]},
+                         {"percent_of_valid", valid ? Round(100.0 * cells[k] / valid, 0.01) : 0.0},
+                         {"area_km2", Round(area_m2[k] / 1e6, 1e-6)}};
+  }
+  json by_worker = json::object();
+  for (const auto& [who, n] : in.computed_by) by_worker[who] = n;
+
+  std::string vehicle_json;
+  google::protobuf::util::JsonPrintOptions opts;
+  opts.preserve_proto_field_names = true;
+  google::protobuf::util::MessageToJsonString(in.request.vehicle(), &vehicle_json, opts);
+
+  json summary = {
+      {"job_id", in.job_id},
+      {"name", in.request.name()},
+      {"grid",
+       {{"width", grid.width},
+        {"height", grid.height},
+        {"geotransform", grid.geotransform},
+        {"crs_wkt", grid.crs_wkt}}},
+      {"cells", {{"total", static_cast<int64_t>(grid.width) * grid.height},
+                 {"valid", valid},
+                 {"no_data", no_data}}},
+      {"valid_area_km2", Round(valid_area / 1e6, 1e-6)},
+      {"classes", classes},
+      {"mean_speed_kmh", valid ? Round(speed_sum_all / valid, 0.01) : 0.0},
+      {"mean_speed_kmh_where_mobile",
+       cells[1] + cells[2] ? Round(speed_sum_mobile / (cells[1] + cells[2]), 0.01) : 0.0},
+      {"terrain_units", in.plan.units.size()},
+      {"tasks",
+       {{"total", in.tasks_total},
+        {"computed", in.tasks_computed},
+        {"cache_hits", in.cache_hits},
+        {"computed_by", by_worker}}},
+      {"provenance",
+       {{"tier", in.tier},
+        {"tier_version", in.tier_version},
+        {"gonogo_version", GONOGO_VERSION},
+        {"vehicle_name", in.request.vehicle().name()},
+        {"vehicle_hash", VehicleHash(in.request.vehicle())},
+        {"vehicle", json::parse(vehicle_json)},
+        {"criteria", CriteriaJson(in.criteria)},
+        {"soft_soil_test",
+         in.soft_soil_vci_pa > 0
+             ? json{{"vehicle_cone_index_kpa", Round(in.soft_soil_vci_pa / 1000.0, 0.01)},
+                    {"passes", in.criteria.passes}}
+             : json(nullptr)},
+        {"workers", in.workers}}},
+      {"elapsed_s", Round(in.elapsed_s, 0.001)},
+  };
+  return summary.dump(2);
+}
+
+std::map<std::string, std::string> ProductMetadata(const SummaryInputs& in) {
+  return {{"GONOGO_JOB_ID", in.job_id},
+          {"GONOGO_TIER", in.tier},
+          {"GONOGO_TIER_VERSION", in.tier_version},
+          {"GONOGO_VERSION", GONOGO_VERSION},
+          {"GONOGO_VEHICLE", in.request.vehicle().name()},
+          {"GONOGO_VEHICLE_HASH", VehicleHash(in.request.vehicle())},
+          {"GONOGO_CRITERIA", CriteriaJson(in.criteria).dump()}};
+}
+
+}  // namespace gonogo::server

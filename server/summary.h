@@ -1,0 +1,35 @@
+// summary.json of a map job and the metadata stamped into its rasters.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "gonogo/v1/mobility.pb.h"
+#include "server/map_plan.h"
+
+namespace gonogo::server {
+
+struct SummaryInputs {
+  std::string job_id;
+  const v1::MapRequest& request;
+  std::string tier;
+  std::string tier_version;
+  std::string workers;  // the pool, in words
+  const MapPlan& plan;
+  const geo::TerrainLayers& terrain;
+  const MapVerdicts& verdicts;
+  size_t tasks_total;
+  size_t tasks_computed;
+  size_t cache_hits;
+  std::map<std::string, int64_t> computed_by;  // "rank 1" -> tasks
+  double soft_soil_vci_pa;                     // 0: no soft-soil test
+  mobility::Criteria criteria;
+  double elapsed_s;
+};
+
+// FNV-1a 64 of the vehicle message's serialised form, as 16 hex digits.
+std::string VehicleHash(const v1::Vehicle& vehicle);
+std::string BuildSummaryJson(const SummaryInputs& in);
+std::map<std::string, std::string> ProductMetadata(const SummaryInputs& in);
+
+}  // namespace gonogo::server

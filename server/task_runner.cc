@@ -1,0 +1,38 @@
+#include "server/task_runner.h"
+
+#include <chrono>
+#include <exception>
+#include <thread>
+
+namespace gonogo::server {
+
+TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task, const CancelCheck& cancelled,
+                   const std::string& computed_by) {
+  TaskResult result;
+  result.task_id = task.task_id;
+  result.computed_by = computed_by;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    // The fault-injection delay sleeps in short steps so that cancellation still reaches it.
+    for (uint32_t waited = 0; waited < task.debug_delay_ms; waited += 5) {
+      if (cancelled && cancelled()) throw CancelledError();
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    const TractionTier& tier = tiers.Get(task.tier);
+    task.request.Validate();
+    result.curve = tier.Compute(task.request, cancelled);
+    result.ok = true;
+  } catch (const CancelledError&) {
+    result.cancelled = true;
+    result.error = "cancelled";
+  } catch (const std::exception& e) {
+    result.error = e.what();
+  } catch (...) {
+    result.error = "unknown error";
+  }
+  result.compute_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace gonogo::server

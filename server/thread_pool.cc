@@ -1,0 +1,99 @@
+#include "server/thread_pool.h"
+
+#include <algorithm>
+
+#include "server/task_runner.h"
+
+namespace gonogo::server {
+
+ThreadPool::ThreadPool(const TierRegistry& tiers, int threads) : tiers_(tiers) {
+  for (int i = 0; i < std::max(1, threads); ++i) threads_.emplace_back([this] { Loop(); });
+}
+
+ThreadPool::~ThreadPool() { Shutdown(); }
+
+std::string ThreadPool::Describe() const {
+  return "in-process pool of " + std::to_string(threads_.size()) + " threads";
+}
+
+void ThreadPool::Submit(TaskSpec task, TaskCallback done) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!stopping_) {
+      queue_.push_back(Entry{std::move(task), std::move(done)});
+      wake_.notify_one();
+      return;
+    }
+  }
+  TaskResult r;
+  r.task_id = task.task_id;
+  r.cancelled = true;
+  r.error = "worker pool is shutting down";
+  done(std::move(r));
+}
+
+void ThreadPool::Cancel(uint64_t task_id) {
+  TaskCallback done;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto running = running_.find(task_id);
+    if (running != running_.end()) {
+      running->second->store(true);
+      return;
+    }
+    auto it = std::find_if(queue_.begin(), queue_.end(),
+                           [&](const Entry& e) { return e.task.task_id == task_id; });
+    if (it == queue_.end()) return;
+    done = std::move(it->done);
+    queue_.erase(it);
+  }
+  TaskResult r;
+  r.task_id = task_id;
+  r.cancelled = true;
+  r.error = "cancelled";
+  done(std::move(r));
+}
+
+void ThreadPool::Loop() {
+  for (;;) {
+    Entry entry;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (queue_.empty()) return;
+      entry = std::move(queue_.front());
+      queue_.pop_front();
+      running_[entry.task.task_id] = entry.cancel;
+    }
+    auto flag = entry.cancel;
+    TaskResult r = RunTask(tiers_, entry.task, [flag] { return flag->load(); }, "thread");
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      running_.erase(entry.task.task_id);
+    }
+    entry.done(std::move(r));
+  }
+}
+
+void ThreadPool::Shutdown() {
+  std::deque<Entry> dropped;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopping_ && threads_.empty()) return;
+    stopping_ = true;
+    dropped.swap(queue_);
+    for (auto& [id, flag] : running_) flag->store(true);
+    wake_.notify_all();
+  }
+  for (Entry& e : dropped) {
+    TaskResult r;
+    r.task_id = e.task.task_id;
+    r.cancelled = true;
+    r.error = "worker pool is shutting down";
+    e.done(std::move(r));
+  }
+  for (auto& t : threads_) t.join();
+  threads_.clear();
+}
+
+}  // namespace gonogo::server

@@ -1,0 +1,37 @@
+// Typed errors shared by every layer. Setup and input mistakes throw InputError naming the offending
+// field; the server maps it to INVALID_ARGUMENT in one place. Numerical outcomes are returned as values.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace gonogo {
+
+// Something the caller got wrong: names the field and the reason.
+class InputError : public std::invalid_argument {
+ public:
+  InputError(std::string field, const std::string& reason)
+      : std::invalid_argument(field + ": " + reason), field_(std::move(field)) {}
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string field_;
+};
+
+// A request that exceeds a configured limit (maps to RESOURCE_EXHAUSTED).
+class LimitError : public std::runtime_error {
+ public:
+  LimitError(std::string field, const std::string& reason)
+      : std::runtime_error(field + ": " + reason), field_(std::move(field)) {}
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string field_;
+};
+
+// Always-on check for input: throws InputError(field, reason) when `ok` is false.
+inline void Require(bool ok, const std::string& field, const std::string& reason) {
+  if (!ok) throw InputError(field, reason);
+}
+
+}  // namespace gonogo

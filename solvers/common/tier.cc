@@ -1,0 +1,30 @@
+#include "solvers/common/tier.h"
+
+#include "solvers/common/errors.h"
+
+namespace gonogo {
+
+void TierRegistry::Register(std::unique_ptr<TractionTier> tier) {
+  const std::string name = tier->Name();
+  tiers_[name] = std::move(tier);
+}
+
+const TractionTier* TierRegistry::Find(const std::string& name) const {
+  auto it = tiers_.find(name);
+  return it == tiers_.end() ? nullptr : it->second.get();
+}
+
+const TractionTier& TierRegistry::Get(const std::string& name) const {
+  if (const TractionTier* t = Find(name)) return *t;
+  std::string known;
+  for (const auto& [n, _] : tiers_) known += (known.empty() ? "" : ", ") + n;
+  throw InputError("tier", "unknown tier '" + name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> TierRegistry::Names() const {
+  std::vector<std::string> names;
+  for (const auto& [n, _] : tiers_) names.push_back(n);
+  return names;
+}
+
+}  // namespace gonogo

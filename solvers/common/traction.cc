@@ -1,0 +1,66 @@
+#include "solvers/common/traction.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo {
+
+namespace {
+bool PositiveFinite(double v) { return std::isfinite(v) && v > 0; }
+}  // namespace
+
+void TyreGeometry::Validate(const std::string& p) const {
+  Require(PositiveFinite(diameter_m), p + "diameter_m", "must be a positive number of metres");
+  Require(PositiveFinite(width_m), p + "width_m", "must be a positive number of metres");
+  Require(PositiveFinite(section_height_m), p + "section_height_m",
+          "must be a positive number of metres");
+  Require(section_height_m < 0.5 * diameter_m, p + "section_height_m",
+          "must be less than half the diameter");
+  Require(std::isfinite(deflection_m) && deflection_m >= 0, p + "deflection_m",
+          "must be zero or a positive number of metres");
+  Require(deflection_m < section_height_m, p + "deflection_m",
+          "must be less than the section height");
+  Require(std::isfinite(rolling_radius_m) && rolling_radius_m >= 0, p + "rolling_radius_m",
+          "must be zero (derived) or a positive number of metres");
+  Require(rolling_radius_m <= 0.5 * diameter_m, p + "rolling_radius_m",
+          "must not exceed half the diameter");
+}
+
+void SoilState::Validate(const std::string& p) const {
+  Require(std::isfinite(cone_index_pa), p + "cone_index_pa", "must be a finite number (got NaN or inf)");
+  Require(cone_index_pa >= 0, p + "cone_index_pa", "must not be negative");
+}
+
+void TractionRequest::Validate() const {
+  soil.Validate("soil.");
+  tyre.Validate("tyre.");
+  Require(PositiveFinite(wheel_load_n), "wheel_load_n", "must be a positive number of newtons");
+  Require(!slips.empty(), "slips", "must hold at least one slip value");
+  for (double s : slips) Require(std::isfinite(s) && s >= 0 && s <= 1, "slips", "each slip must lie in [0, 1]");
+}
+
+std::vector<double> TractionRequest::SlipSweep(double step) {
+  Require(std::isfinite(step) && step > 0 && step <= 1, "slip_step", "must lie in (0, 1]");
+  std::vector<double> slips;
+  const int n = static_cast<int>(std::floor(1.0 / step + 1e-9));
+  for (int i = 0; i <= n; ++i) slips.push_back(std::min(1.0, i * step));
+  return slips;
+}
+
+double TractionCurve::DrawbarPullAt(double slip) const {
+  if (points.empty()) return 0;
+  if (slip <= points.front().slip) return points.front().drawbar_pull_n;
+  for (size_t i = 1; i < points.size(); ++i) {
+    if (slip <= points[i].slip) {
+      const TractionPoint& a = points[i - 1];
+      const TractionPoint& b = points[i];
+      const double t = (slip - a.slip) / (b.slip - a.slip);
+      return a.drawbar_pull_n + t * (b.drawbar_pull_n - a.drawbar_pull_n);
+    }
+  }
+  return points.back().drawbar_pull_n;
+}
+
+}  // namespace gonogo

@@ -1,0 +1,62 @@
+// Value types every traction tier speaks: the request (soil state, tyre, wheel load, slip sweep) and the
+// TractionCurve it answers with (ARCHITECTURE section 1). Plain data, SI units in every name.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace gonogo {
+
+// Pneumatic tyre (or rigid wheel when deflection_m = 0). Symbols of seed 001 Table 1 in brackets.
+struct TyreGeometry {
+  double diameter_m = 0;         // unloaded outside diameter [d]
+  double width_m = 0;            // section width [b]
+  double section_height_m = 0;   // section height [h]
+  double deflection_m = 0;       // vertical deflection under load [delta]
+  double rolling_radius_m = 0;   // rolling radius used for torque and slip [r]; 0 = d/2 - delta
+
+  double RollingRadius() const { return rolling_radius_m > 0 ? rolling_radius_m : 0.5 * diameter_m - deflection_m; }
+  void Validate(const std::string& field_prefix) const;
+};
+
+// Soil state of one terrain unit. The empirical tier reads only the cone index.
+struct SoilState {
+  double cone_index_pa = 0;      // cone index [CI], Pa
+  std::string soil_name;         // soil-library name, empty when only the cone index is known
+
+  void Validate(const std::string& field_prefix) const;
+};
+
+// One traction task: a single wheel on one soil state, swept over slip.
+struct TractionRequest {
+  SoilState soil;
+  TyreGeometry tyre;
+  double wheel_load_n = 0;       // vertical load on the wheel [W], N
+  std::vector<double> slips;     // slip values s = 1 - V/(omega r), each in [0, 1]
+
+  void Validate() const;
+  // Evenly spaced slips 0, step, 2 step, ... up to and including 1 (or the last point below it).
+  static std::vector<double> SlipSweep(double step);
+};
+
+// One point of a traction curve.
+struct TractionPoint {
+  double slip = 0;                  // s, -
+  double drawbar_pull_n = 0;        // D = gross traction - motion resistance, N
+  double torque_nm = 0;             // wheel torque T, N m
+  double sinkage_m = 0;             // z, m
+  double tractive_efficiency = 0;   // eta = D (1 - s) / (T / r), -; 0 where D <= 0
+  double gross_traction_n = 0;      // T / r, N
+  double motion_resistance_n = 0;   // N
+};
+
+struct TractionCurve {
+  std::string tier;          // tier name, e.g. "empirical"
+  std::string tier_version;  // changes whenever the tier's numbers could change
+  std::vector<TractionPoint> points;
+
+  // Linear interpolation of drawbar pull (N) at slip s within the sweep.
+  double DrawbarPullAt(double slip) const;
+};
+
+}  // namespace gonogo

@@ -1,0 +1,150 @@
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <filesystem>
+
+#include "cache/curve_key.h"
+#include "cache/curve_store.h"
+#include "cache/database.h"
+#include "cache/job_store.h"
+
+namespace gonogo::cache {
+namespace {
+
+namespace fs = std::filesystem;
+
+class StoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("gonogo-cache-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    path_ = (dir_ / "gonogo.sqlite").string();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  StoredCurve Curve(double ci_pa, int64_t t_ms) {
+    StoredCurve c;
+    c.request.soil.cone_index_pa = ci_pa;
+    c.request.tyre = TyreGeometry{1.011, 0.335, 0.2178, 0.0327, 0.4728};
+    c.request.wheel_load_n = 14513;
+    c.request.slips = {0, 0.5, 1};
+    c.request = Quantise(c.request);
+    c.cache_key = CurveKey("empirical", "empirical-1", c.request);
+    c.curve.tier = "empirical";
+    c.curve.tier_version = "empirical-1";
+    for (double s : c.request.slips) {
+      c.curve.points.push_back({s, 1000 * s - 100, 5000 * s, 0.01, 0.5 * s, 1000 * s, 100});
+    }
+    c.computed_by = "rank 1";
+    c.compute_seconds = 1e-5;
+    c.computed_unix_ms = t_ms;
+    return c;
+  }
+
+  fs::path dir_;
+  std::string path_;
+};
+
+TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
+  Database db(path_);
+  EXPECT_EQ(db.SchemaVersion(), 1);
+  Statement s = db.Prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(s.Step());
+  EXPECT_EQ(s.Text(0), "wal");
+}
+
+TEST_F(StoreTest, RefusesADatabaseNewerThanTheCode) {
+  { Database db(path_); }
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &raw), SQLITE_OK);
+  sqlite3_exec(raw, "PRAGMA user_version=99", nullptr, nullptr, nullptr);
+  sqlite3_close(raw);
+  EXPECT_THROW(Database db(path_), DatabaseError);
+}
+
+TEST_F(StoreTest, CurvesSurviveReopeningAndRoundTripExactly) {
+  const StoredCurve c = Curve(149000, 42);
+  {
+    Database db(path_);
+    CurveStore store(db);
+    EXPECT_TRUE(store.Put(c));
+    EXPECT_FALSE(store.Put(Curve(149000, 99))) << "an existing key is kept, not overwritten";
+  }
+  Database db(path_);
+  CurveStore store(db);
+  auto found = store.Find(c.cache_key);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_EQ(found->computed_unix_ms, 42);
+  EXPECT_EQ(found->computed_by, "rank 1");
+  ASSERT_EQ(found->curve.points.size(), 3u);
+  EXPECT_DOUBLE_EQ(found->curve.points[1].drawbar_pull_n, 400);
+  EXPECT_DOUBLE_EQ(found->curve.points[2].torque_nm, 5000);
+  EXPECT_DOUBLE_EQ(found->request.tyre.rolling_radius_m, 0.4728);
+  EXPECT_EQ(found->request.slips, c.request.slips);
+  EXPECT_FALSE(store.Find("no such key").has_value());
+}
+
+TEST_F(StoreTest, ListFiltersAndPagesNewestFirst) {
+  Database db(path_);
+  CurveStore store(db);
+  for (int i = 0; i < 7; ++i) store.Put(Curve(100e3 * (i + 1), i));
+  EXPECT_EQ(store.Count(), 7);
+  CurvePage p1 = store.List({}, 3, 0);
+  ASSERT_EQ(p1.curves.size(), 3u);
+  EXPECT_GT(p1.curves[0].request.soil.cone_index_pa, p1.curves[2].request.soil.cone_index_pa);
+  ASSERT_NE(p1.next_after_id, 0);
+  CurvePage p2 = store.List({}, 3, p1.next_after_id);
+  CurvePage p3 = store.List({}, 3, p2.next_after_id);
+  EXPECT_EQ(p2.curves.size(), 3u);
+  EXPECT_EQ(p3.curves.size(), 1u);
+  EXPECT_EQ(p3.next_after_id, 0);
+  CurveFilter f;
+  f.min_cone_index_pa = 250e3;
+  f.max_cone_index_pa = 450e3;
+  EXPECT_EQ(store.List(f, 50, 0).curves.size(), 2u);
+  f = {};
+  f.tier = "bekker";
+  EXPECT_TRUE(store.List(f, 50, 0).curves.empty());
+}
+
+TEST_F(StoreTest, JobsPersistTheirStateAndUnfinishedOnesAreFound) {
+  {
+    Database db(path_);
+    JobStore jobs(db);
+    for (int i = 0; i < 3; ++i) {
+      JobRecord j;
+      j.id = "job-" + std::to_string(i);
+      j.name = "map " + std::to_string(i);
+      j.tier = "empirical";
+      j.request = std::string("\x01\x00\x02", 3);
+      j.created_unix_ms = 1000 + i;
+      jobs.Create(j);
+    }
+    jobs.SetState("job-1", JobState::kRunning, "computing");
+    jobs.SetProgress("job-1", {0.5, 10, 20, 4, "computing 10/20"});
+    jobs.Finish("job-2", JobState::kDone, "done", "{}", {"gonogo.tif", "summary.json"}, 5000);
+  }
+  Database db(path_);
+  JobStore jobs(db);
+  auto j1 = jobs.Get("job-1");
+  ASSERT_TRUE(j1.has_value());
+  EXPECT_EQ(j1->state, JobState::kRunning);
+  EXPECT_EQ(j1->tasks_done, 10);
+  EXPECT_EQ(j1->cache_hits, 4);
+  EXPECT_EQ(j1->request, std::string("\x01\x00\x02", 3)) << "binary requests survive";
+  auto unfinished = jobs.Unfinished();
+  ASSERT_EQ(unfinished.size(), 2u);
+  EXPECT_EQ(unfinished[0].id, "job-0");
+  EXPECT_EQ(unfinished[1].id, "job-1");
+  auto done = jobs.Get("job-2");
+  EXPECT_EQ(done->products, (std::vector<std::string>{"gonogo.tif", "summary.json"}));
+  EXPECT_DOUBLE_EQ(done->fraction_done, 1.0);
+  EXPECT_EQ(jobs.List(2).front().id, "job-2");
+  EXPECT_FALSE(jobs.Get("job-9").has_value());
+}
+
+}  // namespace
+}  // namespace gonogo::cache

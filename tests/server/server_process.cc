@@ -1,0 +1,194 @@
+#include "server_process.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace gonogo::testing {
+
+std::string SourceDir() { return std::getenv("GONOGO_SOURCE_DIR"); }
+std::string BinaryDir() { return std::getenv("GONOGO_BINARY_DIR"); }
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+ScratchDir::ScratchDir(const std::string& tag) {
+  path_ = fs::temp_directory_path() / ("gonogo-test-" + tag + "-" + std::to_string(getpid()));
+  fs::remove_all(path_);
+  fs::create_directories(path_);
+}
+ScratchDir::~ScratchDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+bool MakeSampleTerrain(const fs::path& out, int size) {
+  const std::string cmd = "/usr/bin/python3 " + SourceDir() +
+                          "/clients/sample-data/make_sample_terrain.py --out " + out.string() +
+                          " --size " + std::to_string(size) + " > /dev/null";
+  return std::system(cmd.c_str()) == 0;
+}
+
+ServerProcess::ServerProcess(const fs::path& data_dir, std::vector<std::string> extra,
+                             int mpi_ranks) {
+  std::vector<std::string> args;
+  if (mpi_ranks > 0) {
+    args = {"mpirun", "--allow-run-as-root", "--oversubscribe", "-np", std::to_string(mpi_ranks)};
+  }
+  args.push_back(BinaryDir() + "/server/gonogo-server");
+  args.insert(args.end(), {"--data-dir", data_dir.string(), "--listen", "127.0.0.1:0"});
+  args.insert(args.end(), extra.begin(), extra.end());
+
+  int out[2];
+  if (pipe(out) != 0) throw std::runtime_error("pipe failed");
+  pid_ = fork();
+  if (pid_ == 0) {
+    setpgid(0, 0);  // own process group: Kill() reaches mpirun's children too
+    dup2(out[1], STDOUT_FILENO);
+    close(out[0]);
+    close(out[1]);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    _exit(127);
+  }
+  close(out[1]);
+  // The banner line carries the bound port.
+  FILE* stream = fdopen(out[0], "r");
+  char line[4096];
+  const std::regex re(R"(listening on (\S+) \(pid (\d+))");
+  while (fgets(line, sizeof line, stream)) {
+    std::cmatch m;
+    if (std::regex_search(line, m, re)) {
+      endpoint_ = m[1];
+      server_pid_ = std::stoi(m[2]);
+      banner_ = line;
+      break;
+    }
+  }
+  if (endpoint_.empty()) throw std::runtime_error("gonogo-server did not start");
+  // Keep draining stdout in the background so the server never blocks on a full pipe.
+  std::thread([stream] {
+    char buf[4096];
+    while (fgets(buf, sizeof buf, stream)) {
+    }
+    fclose(stream);
+  }).detach();
+}
+
+ServerProcess::~ServerProcess() {
+  if (Running()) Kill();
+}
+
+bool ServerProcess::Running() {
+  if (pid_ <= 0) return false;
+  int status = 0;
+  if (waitpid(pid_, &status, WNOHANG) == pid_) {
+    pid_ = -1;
+    return false;
+  }
+  return true;
+}
+
+int ServerProcess::Terminate() {
+  if (pid_ <= 0) return -1;
+  kill(server_pid_, SIGTERM);
+  int status = 0;
+  waitpid(pid_, &status, 0);
+  pid_ = -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+void ServerProcess::Kill() {
+  if (pid_ <= 0) return;
+  kill(-pid_, SIGKILL);
+  int status = 0;
+  waitpid(pid_, &status, 0);
+  pid_ = -1;
+}
+
+std::shared_ptr<grpc::Channel> ServerProcess::Channel() const {
+  return grpc::CreateChannel(endpoint_, grpc::InsecureChannelCredentials());
+}
+
+std::unique_ptr<v1::MobilityService::Stub> ServerProcess::Stub() const {
+  return v1::MobilityService::NewStub(Channel());
+}
+
+v1::Vehicle FedAlpha() {
+  v1::Vehicle v;
+  const auto status = google::protobuf::util::JsonStringToMessage(
+      ReadFile(SourceDir() + "/clients/vehicles/fed_alpha.json"), &v);
+  if (!status.ok()) throw std::runtime_error("fed_alpha.json: " + std::string(status.message()));
+  return v;
+}
+
+v1::SoilTable SampleSoilTable(const fs::path& terrain_dir) {
+  v1::SoilTable t;
+  const auto status =
+      google::protobuf::util::JsonStringToMessage(ReadFile(terrain_dir / "soil_table.json"), &t);
+  if (!status.ok()) throw std::runtime_error("soil_table.json: " + std::string(status.message()));
+  return t;
+}
+
+grpc::Status Submit(v1::MobilityService::Stub& stub, const v1::MapRequest& request,
+                    const std::vector<std::pair<v1::RasterRole, std::string>>& rasters,
+                    v1::Job* job) {
+  grpc::ClientContext ctx;
+  auto writer = stub.SubmitMap(&ctx, job);
+  v1::SubmitMapRequest first;
+  *first.mutable_request() = request;
+  writer->Write(first);
+  for (const auto& [role, bytes] : rasters) {
+    for (size_t off = 0; off < bytes.size() || off == 0; off += 1 << 20) {
+      v1::SubmitMapRequest m;
+      m.mutable_chunk()->set_role(role);
+      m.mutable_chunk()->set_data(bytes.substr(off, 1 << 20));
+      if (!writer->Write(m)) break;
+      if (bytes.empty()) break;
+    }
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
+v1::JobStatus WaitForEnd(v1::MobilityService::Stub& stub, const std::string& job_id) {
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::minutes(5));
+  v1::WatchJobRequest req;
+  req.set_job_id(job_id);
+  auto reader = stub.WatchJob(&ctx, req);
+  v1::JobStatus s, last;
+  while (reader->Read(&s)) last = s;
+  reader->Finish();
+  return last;
+}
+
+std::map<std::string, std::string> DownloadAll(v1::MobilityService::Stub& stub,
+                                               const std::string& job_id) {
+  grpc::ClientContext ctx;
+  v1::DownloadResultRequest req;
+  req.set_job_id(job_id);
+  auto reader = stub.DownloadResult(&ctx, req);
+  std::map<std::string, std::string> files;
+  v1::ResultChunk c;
+  while (reader->Read(&c)) files[c.product()] += c.data();
+  reader->Finish();
+  return files;
+}
+
+}  // namespace gonogo::testing

@@ -1,0 +1,81 @@
+// Test fixture pieces: a real gonogo-server process on a loopback port, a scratch directory, the
+// sample terrain, and small helpers around the generated stubs.
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+#include <sys/types.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gonogo/v1/mobility.grpc.pb.h"
+
+namespace gonogo::testing {
+
+namespace fs = std::filesystem;
+
+std::string SourceDir();
+std::string BinaryDir();
+std::string ReadFile(const fs::path& path);
+
+// A fresh directory under /tmp, removed by the destructor.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag);
+  ~ScratchDir();
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// Runs the bundled sample-terrain script into `out` (size x size cells); returns false on failure.
+bool MakeSampleTerrain(const fs::path& out, int size);
+
+// gonogo-server (optionally under mpirun) listening on 127.0.0.1:0.
+class ServerProcess {
+ public:
+  // `mpi_ranks` 0 starts the plain binary; N > 0 starts it under `mpirun -np N`.
+  ServerProcess(const fs::path& data_dir, std::vector<std::string> extra_args = {},
+                int mpi_ranks = 0);
+  ~ServerProcess();
+
+  const std::string& endpoint() const { return endpoint_; }
+  const std::string& banner() const { return banner_; }
+  std::unique_ptr<v1::MobilityService::Stub> Stub() const;
+  std::shared_ptr<grpc::Channel> Channel() const;
+  // SIGTERM to the serving process (rank 0 under mpirun) and wait; returns the exit status of the
+  // started process (mpirun's under MPI).
+  int Terminate();
+  // SIGKILL: the crash case.
+  void Kill();
+  bool Running();
+
+ private:
+  pid_t pid_ = -1;
+  pid_t server_pid_ = -1;  // the serving process: pid_ itself, or rank 0 under mpirun
+  std::string endpoint_;
+  std::string banner_;
+};
+
+struct MapFiles {
+  std::string cone_index, slope, elevation, soil_class, soil_table;
+};
+
+v1::Vehicle FedAlpha();
+// The soil table written by the sample-terrain script into `terrain_dir`.
+v1::SoilTable SampleSoilTable(const fs::path& terrain_dir);
+// Sends a SubmitMap stream with these rasters (role -> bytes); returns the status.
+grpc::Status Submit(v1::MobilityService::Stub& stub, const v1::MapRequest& request,
+                    const std::vector<std::pair<v1::RasterRole, std::string>>& rasters,
+                    v1::Job* job);
+// Follows WatchJob to the end; returns the last status seen.
+v1::JobStatus WaitForEnd(v1::MobilityService::Stub& stub, const std::string& job_id);
+// Downloads every product into `dir`; returns name -> bytes.
+std::map<std::string, std::string> DownloadAll(v1::MobilityService::Stub& stub,
+                                               const std::string& job_id);
+
+}  // namespace gonogo::testing

@@ -1,0 +1,402 @@
+// The MobilityService end to end against a real gonogo-server on a loopback port: health and
+// reflection, a sample map through every RPC, the cache on a second run, bad input of every kind,
+// cancellation, traction-curve queries and the SIGTERM drain.
+#include <gdal.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include <ogr_srs_api.h>
+
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "grpc/reflection/v1alpha/reflection.grpc.pb.h"
+#include "raster_fixtures.h"
+#include "server_process.h"
+
+namespace gonogo::testing {
+namespace {
+
+using nlohmann::json;
+
+class ServiceTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scratch_ = new ScratchDir("service");
+    ASSERT_TRUE(MakeSampleTerrain(scratch_->path() / "terrain", 48));
+    server_ = new ServerProcess(scratch_->path() / "data");
+  }
+  static void TearDownTestSuite() {
+    delete server_;
+    delete scratch_;
+  }
+
+  static std::string Terrain(const std::string& name) {
+    return ReadFile(scratch_->path() / "terrain" / name);
+  }
+
+  static v1::MapRequest SampleRequest() {
+    v1::MapRequest r;
+    r.set_name("sample");
+    r.set_tier("empirical");
+    *r.mutable_vehicle() = FedAlpha();
+    *r.mutable_soil_table() = SampleSoilTable(scratch_->path() / "terrain");
+    return r;
+  }
+
+  static std::vector<std::pair<v1::RasterRole, std::string>> SampleRasters() {
+    return {{v1::RASTER_ROLE_CONE_INDEX, Terrain("cone_index.tif")},
+            {v1::RASTER_ROLE_ELEVATION, Terrain("elevation.tif")},
+            {v1::RASTER_ROLE_SOIL_CLASS, Terrain("soil_class.tif")}};
+  }
+
+  // Runs the sample map to the end and returns its summary.
+  static json RunSample(std::string* job_id = nullptr) {
+    auto stub = server_->Stub();
+    v1::Job job;
+    const grpc::Status s = Submit(*stub, SampleRequest(), SampleRasters(), &job);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    const v1::JobStatus end = WaitForEnd(*stub, job.job_id());
+    EXPECT_EQ(end.state(), v1::JOB_STATE_DONE) << end.message();
+    if (job_id) *job_id = job.job_id();
+    grpc::ClientContext ctx;
+    v1::GetJobRequest req;
+    req.set_job_id(job.job_id());
+    v1::Job done;
+    stub->GetJob(&ctx, req, &done);
+    return json::parse(done.summary_json());
+  }
+
+  static int64_t CurveCount() {
+    auto stub = server_->Stub();
+    int64_t n = 0;
+    std::string token;
+    do {
+      grpc::ClientContext ctx;
+      v1::ListTractionCurvesRequest req;
+      req.set_page_size(1000);
+      req.set_page_token(token);
+      v1::ListTractionCurvesResponse resp;
+      EXPECT_TRUE(stub->ListTractionCurves(&ctx, req, &resp).ok());
+      n += resp.curves_size();
+      token = resp.next_page_token();
+    } while (!token.empty());
+    return n;
+  }
+
+  static ScratchDir* scratch_;
+  static ServerProcess* server_;
+};
+
+ScratchDir* ServiceTest::scratch_ = nullptr;
+ServerProcess* ServiceTest::server_ = nullptr;
+
+TEST_F(ServiceTest, HealthIsServingAndReflectionListsTheService) {
+  auto health = grpc::health::v1::Health::NewStub(server_->Channel());
+  for (const std::string name : {"", "gonogo.v1.MobilityService"}) {
+    grpc::ClientContext ctx;
+    grpc::health::v1::HealthCheckRequest req;
+    req.set_service(name);
+    grpc::health::v1::HealthCheckResponse resp;
+    ASSERT_TRUE(health->Check(&ctx, req, &resp).ok());
+    EXPECT_EQ(resp.status(), grpc::health::v1::HealthCheckResponse::SERVING) << name;
+  }
+  auto reflection = grpc::reflection::v1alpha::ServerReflection::NewStub(server_->Channel());
+  grpc::ClientContext ctx;
+  auto stream = reflection->ServerReflectionInfo(&ctx);
+  grpc::reflection::v1alpha::ServerReflectionRequest req;
+  req.set_list_services("*");
+  ASSERT_TRUE(stream->Write(req));
+  stream->WritesDone();
+  grpc::reflection::v1alpha::ServerReflectionResponse resp;
+  ASSERT_TRUE(stream->Read(&resp));
+  std::vector<std::string> names;
+  for (const auto& s : resp.list_services_response().service()) names.push_back(s.name());
+  EXPECT_NE(std::find(names.begin(), names.end(), "gonogo.v1.MobilityService"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "grpc.health.v1.Health"), names.end());
+}
+
+TEST_F(ServiceTest, SampleMapProducesGeoreferencedProductsAndASecondRunComputesNothing) {
+  std::string first_id;
+  const json first = RunSample(&first_id);
+  const int64_t total = first["tasks"]["total"];
+  EXPECT_GT(total, 0);
+  EXPECT_EQ(first["tasks"]["computed"].get<int64_t>() + first["tasks"]["cache_hits"].get<int64_t>(),
+            total);
+  EXPECT_EQ(first["provenance"]["tier"], "empirical");
+  EXPECT_EQ(first["provenance"]["vehicle_name"], "FED Alpha");
+  EXPECT_TRUE(first["tasks"]["computed_by"].contains("thread") ||
+              first["tasks"]["computed"].get<int64_t>() == 0);
+  double percent = 0;
+  for (const char* k : {"GO", "SLOW-GO", "NO-GO"}) percent += first["classes"][k]["percent_of_valid"].get<double>();
+  EXPECT_NEAR(percent, 100.0, 0.05);
+  EXPECT_GT(first["classes"]["GO"]["cells"].get<int64_t>(), 0) << "firm flat ground is GO";
+  EXPECT_GT(first["classes"]["NO-GO"]["cells"].get<int64_t>(), 0) << "soft ground is NO-GO";
+
+  // Products: CRS and geotransform of the cone-index input, palette, nodata, legend.
+  auto stub = server_->Stub();
+  auto files = DownloadAll(*stub, first_id);
+  for (const char* name : {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"}) {
+    EXPECT_GT(files[name].size(), 0u) << name;
+  }
+  GDALAllRegister();
+  VSILFILE* f = VSIFileFromMemBuffer("/vsimem/out_gonogo.tif",
+                                     reinterpret_cast<GByte*>(files["gonogo.tif"].data()),
+                                     files["gonogo.tif"].size(), FALSE);
+  VSIFCloseL(f);
+  const std::string ci_bytes = Terrain("cone_index.tif");
+  std::string ci_copy = ci_bytes;
+  VSIFCloseL(VSIFileFromMemBuffer("/vsimem/in_ci.tif", reinterpret_cast<GByte*>(ci_copy.data()),
+                                  ci_copy.size(), FALSE));
+  GDALDatasetH out = GDALOpen("/vsimem/out_gonogo.tif", GA_ReadOnly);
+  GDALDatasetH in = GDALOpen("/vsimem/in_ci.tif", GA_ReadOnly);
+  ASSERT_NE(out, nullptr);
+  ASSERT_NE(in, nullptr);
+  double gt_out[6], gt_in[6];
+  GDALGetGeoTransform(out, gt_out);
+  GDALGetGeoTransform(in, gt_in);
+  for (int i = 0; i < 6; ++i) EXPECT_DOUBLE_EQ(gt_out[i], gt_in[i]);
+  EXPECT_TRUE(OSRIsSame(GDALGetSpatialRef(out), GDALGetSpatialRef(in)));
+  GDALRasterBandH band = GDALGetRasterBand(out, 1);
+  EXPECT_EQ(GDALGetRasterDataType(band), GDT_Byte);
+  int has_nodata = 0;
+  EXPECT_EQ(GDALGetRasterNoDataValue(band, &has_nodata), 255);
+  EXPECT_TRUE(has_nodata);
+  ASSERT_NE(GDALGetRasterColorTable(band), nullptr);
+  const GDALColorEntry* no_go = GDALGetColorEntry(GDALGetRasterColorTable(band), 0);
+  EXPECT_GT(no_go->c1, 200);  // red
+  EXPECT_LT(no_go->c2, 100);
+  std::string legend;
+  for (char** md = GDALGetMetadata(out, nullptr); md && *md; ++md) {
+    if (std::string(*md).find("NO-GO") != std::string::npos) legend = *md;
+  }
+  EXPECT_FALSE(legend.empty()) << "legend in the dataset metadata";
+  std::vector<uint8_t> classes(GDALGetRasterXSize(out) * GDALGetRasterYSize(out));
+  ASSERT_EQ(GDALRasterIO(band, GF_Read, 0, 0, GDALGetRasterXSize(out), GDALGetRasterYSize(out),
+                         classes.data(), GDALGetRasterXSize(out), GDALGetRasterYSize(out), GDT_Byte,
+                         0, 0),
+            CE_None);
+  for (uint8_t c : classes) ASSERT_TRUE(c <= 2 || c == 255) << int(c);
+  GDALClose(out);
+  GDALClose(in);
+  VSIUnlink("/vsimem/out_gonogo.tif");
+  VSIUnlink("/vsimem/in_ci.tif");
+
+  // The same job again: every curve from the cache, identical classes.
+  std::string second_id;
+  const json second = RunSample(&second_id);
+  EXPECT_EQ(second["tasks"]["total"], total);
+  EXPECT_EQ(second["tasks"]["computed"], 0);
+  EXPECT_EQ(second["tasks"]["cache_hits"], total);
+  EXPECT_EQ(second["classes"], first["classes"]);
+  EXPECT_EQ(DownloadAll(*stub, second_id)["gonogo.tif"].size(), files["gonogo.tif"].size());
+}
+
+TEST_F(ServiceTest, BadInputIsRejectedWithTheFieldAndHarmsNothing) {
+  std::string good_id;
+  RunSample(&good_id);
+  const int64_t curves_before = CurveCount();
+  auto stub = server_->Stub();
+
+  TiffSpec spec;
+  std::vector<float> firm(64, 800.0f);
+  std::vector<float> flat(64, 2.0f);
+  const std::string slope = MakeTiff(spec, flat);
+  struct Case {
+    std::string what;
+    v1::MapRequest request;
+    std::vector<std::pair<v1::RasterRole, std::string>> rasters;
+    std::string field;
+  };
+  auto base = [&] {
+    v1::MapRequest r;
+    r.set_tier("empirical");
+    *r.mutable_vehicle() = FedAlpha();
+    return r;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"not a raster", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, "this is not a GeoTIFF"},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "cone_index"});
+  cases.push_back({"empty raster", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, ""}, {v1::RASTER_ROLE_SLOPE, slope}},
+                   "cone_index"});
+  cases.push_back({"all nodata", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, std::vector<float>(64, -9999))},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "cone_index"});
+  TiffSpec no_crs = spec;
+  no_crs.epsg = 0;
+  cases.push_back({"no CRS", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(no_crs, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "cone_index"});
+  std::vector<float> negative = firm;
+  negative[10] = -5;
+  cases.push_back({"negative cone index", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, negative)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "cone_index"});
+  TiffSpec far = spec;
+  far.origin_x += 100000;
+  cases.push_back({"no overlap", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, MakeTiff(far, flat)}},
+                   "slope"});
+  v1::MapRequest no_mass = base();
+  no_mass.mutable_vehicle()->set_mass_kg(0);
+  cases.push_back({"vehicle mass missing", no_mass,
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "vehicle.mass_kg"});
+  v1::MapRequest no_vehicle = base();
+  no_vehicle.clear_vehicle();
+  cases.push_back({"vehicle missing", no_vehicle,
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "vehicle"});
+  v1::MapRequest bad_tyre = base();
+  bad_tyre.mutable_vehicle()->mutable_axles(1)->mutable_tyre()->set_width_m(-0.3);
+  cases.push_back({"negative tyre width", bad_tyre,
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "vehicle.axles[1].tyre.width_m"});
+  v1::MapRequest bad_tier = base();
+  bad_tier.set_tier("fe-magic");
+  cases.push_back({"unknown tier", bad_tier,
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope}},
+                   "tier"});
+  cases.push_back({"slope and elevation both missing", base(),
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)}}, "slope"});
+  v1::MapRequest with_table = base();
+  *with_table.mutable_soil_table() = SampleSoilTable(scratch_->path() / "terrain");
+  cases.push_back({"soil class not in the table", with_table,
+                   {{v1::RASTER_ROLE_CONE_INDEX, MakeTiff(spec, firm)},
+                    {v1::RASTER_ROLE_SLOPE, slope},
+                    {v1::RASTER_ROLE_SOIL_CLASS, MakeTiff(spec, std::vector<float>(64, 77))}},
+                   "soil_class"});
+
+  for (const Case& c : cases) {
+    v1::Job job;
+    const grpc::Status s = Submit(*stub, c.request, c.rasters, &job);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << c.what << ": " << s.error_message();
+    EXPECT_EQ(s.error_message().rfind(c.field + ":", 0), 0u)
+        << c.what << ": message should start with the field: " << s.error_message();
+  }
+
+  // The service still serves, the earlier job is intact and no cached curve was touched.
+  grpc::ClientContext ctx;
+  v1::GetJobRequest req;
+  req.set_job_id(good_id);
+  v1::Job job;
+  ASSERT_TRUE(stub->GetJob(&ctx, req, &job).ok());
+  EXPECT_EQ(job.status().state(), v1::JOB_STATE_DONE);
+  EXPECT_EQ(CurveCount(), curves_before);
+  EXPECT_EQ(DownloadAll(*stub, good_id).size(), 4u);
+}
+
+TEST_F(ServiceTest, SizeLimitGivesResourceExhausted) {
+  ScratchDir dir("limits");
+  ServerProcess small(dir.path(), {"--max-cells", "1000"});
+  auto stub = small.Stub();
+  v1::Job job;
+  const grpc::Status s = Submit(*stub, SampleRequest(), SampleRasters(), &job);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << s.error_message();
+  EXPECT_NE(s.error_message().find("cone_index"), std::string::npos) << s.error_message();
+}
+
+TEST_F(ServiceTest, CancelStopsARunningJob) {
+  ScratchDir dir("cancel");
+  ServerProcess slow(dir.path(), {"--task-delay-ms", "300", "--threads", "1"});
+  auto stub = slow.Stub();
+  v1::Job job;
+  ASSERT_TRUE(Submit(*stub, SampleRequest(), SampleRasters(), &job).ok());
+  // Wait until it is running, then cancel.
+  for (int i = 0; i < 100; ++i) {
+    grpc::ClientContext ctx;
+    v1::GetJobRequest req;
+    req.set_job_id(job.job_id());
+    v1::Job now;
+    stub->GetJob(&ctx, req, &now);
+    if (now.status().state() == v1::JOB_STATE_RUNNING && now.status().tasks_total() > 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  grpc::ClientContext ctx;
+  v1::CancelJobRequest cancel;
+  cancel.set_job_id(job.job_id());
+  v1::Job after;
+  ASSERT_TRUE(stub->CancelJob(&ctx, cancel, &after).ok());
+  const auto start = std::chrono::steady_clock::now();
+  const v1::JobStatus end = WaitForEnd(*stub, job.job_id());
+  EXPECT_EQ(end.state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_LT(end.tasks_done(), end.tasks_total());
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5))
+      << "cancellation reaches the running task instead of waiting for the queue";
+
+  grpc::ClientContext again_ctx;
+  v1::Job again;
+  EXPECT_EQ(stub->CancelJob(&again_ctx, cancel, &again).error_code(),
+            grpc::StatusCode::FAILED_PRECONDITION);
+  grpc::ClientContext unknown_ctx;
+  cancel.set_job_id("job-nope");
+  EXPECT_EQ(stub->CancelJob(&unknown_ctx, cancel, &again).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(slow.Terminate(), 0) << "SIGTERM drains and exits cleanly";
+}
+
+TEST_F(ServiceTest, TractionCurveIsComputedOnceThenServedFromTheCache) {
+  auto stub = server_->Stub();
+  v1::GetTractionCurveRequest req;
+  req.set_tier("empirical");
+  *req.mutable_tyre() = FedAlpha().axles(0).tyre();
+  req.set_wheel_load_n(14513.3);
+  req.mutable_soil()->set_cone_index_pa(412345);
+  v1::TractionCurve first, second;
+  {
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->GetTractionCurve(&ctx, req, &first).ok());
+  }
+  {
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->GetTractionCurve(&ctx, req, &second).ok());
+  }
+  EXPECT_FALSE(first.provenance().cache_hit());
+  EXPECT_TRUE(second.provenance().cache_hit());
+  EXPECT_EQ(first.provenance().cache_key(), second.provenance().cache_key());
+  ASSERT_EQ(first.points_size(), 21);
+  EXPECT_DOUBLE_EQ(first.points(10).drawbar_pull_n(), second.points(10).drawbar_pull_n());
+  EXPECT_NEAR(first.soil().cone_index_pa(), 412345, 0.005 * 412345) << "snapped to a 1 % bin";
+  EXPECT_EQ(first.provenance().tier_version(), "empirical-1");
+
+  req.mutable_soil()->set_cone_index_pa(NAN);
+  grpc::ClientContext bad_ctx;
+  v1::TractionCurve bad;
+  const grpc::Status s = stub->GetTractionCurve(&bad_ctx, req, &bad);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(s.error_message().rfind("soil.cone_index_pa:", 0), 0u) << s.error_message();
+
+  // Paging walks every curve exactly once.
+  std::set<std::string> keys;
+  std::string token;
+  int pages = 0;
+  do {
+    grpc::ClientContext ctx;
+    v1::ListTractionCurvesRequest list;
+    list.set_tier("empirical");
+    list.set_page_size(7);
+    list.set_page_token(token);
+    v1::ListTractionCurvesResponse resp;
+    ASSERT_TRUE(stub->ListTractionCurves(&ctx, list, &resp).ok());
+    for (const auto& c : resp.curves()) EXPECT_TRUE(keys.insert(c.provenance().cache_key()).second);
+    token = resp.next_page_token();
+    ++pages;
+  } while (!token.empty());
+  EXPECT_EQ(static_cast<int64_t>(keys.size()), CurveCount());
+  EXPECT_GE(pages, 1);
+}
+
+}  // namespace
+}  // namespace gonogo::testing
