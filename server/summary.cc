@@ -30,7 +30,11 @@ json CriteriaJson(const mobility::Criteria& c) {
           {"passes", c.passes},           {"slip_step", c.slip_step}};
 }
 
-double Round(double v, double step) { return std::round(v / step) * step; }
+// Rounds to `decimals` places so that the JSON prints the short decimal (27.99, not 27.990000000000002).
+double Round(double v, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(v * scale) / scale;
+}
 
 }  // namespace
 
@@ -62,8 +66,8 @@ std::string BuildSummaryJson(const SummaryInputs& in) {
   for (int k = 2; k >= 0; --k) {
     classes[names[k]] = {{"code", k},
                          {"cells", cells[k]},
-                         {"percent_of_valid", valid ? Round(100.0 * cells[k] / valid, 0.01) : 0.0},
-                         {"area_km2", Round(area_m2[k] / 1e6, 1e-6)}};
+                         {"percent_of_valid", valid ? Round(100.0 * cells[k] / valid, 2) : 0.0},
+                         {"area_km2", Round(area_m2[k] / 1e6, 6)}};
   }
   json by_worker = json::object();
   for (const auto& [who, n] : in.computed_by) by_worker[who] = n;
@@ -84,11 +88,11 @@ std::string BuildSummaryJson(const SummaryInputs& in) {
       {"cells", {{"total", static_cast<int64_t>(grid.width) * grid.height},
                  {"valid", valid},
                  {"no_data", no_data}}},
-      {"valid_area_km2", Round(valid_area / 1e6, 1e-6)},
+      {"valid_area_km2", Round(valid_area / 1e6, 6)},
       {"classes", classes},
-      {"mean_speed_kmh", valid ? Round(speed_sum_all / valid, 0.01) : 0.0},
+      {"mean_speed_kmh", valid ? Round(speed_sum_all / valid, 2) : 0.0},
       {"mean_speed_kmh_where_mobile",
-       cells[1] + cells[2] ? Round(speed_sum_mobile / (cells[1] + cells[2]), 0.01) : 0.0},
+       cells[1] + cells[2] ? Round(speed_sum_mobile / (cells[1] + cells[2]), 2) : 0.0},
       {"terrain_units", in.plan.units.size()},
       {"tasks",
        {{"total", in.tasks_total},
@@ -105,11 +109,11 @@ std::string BuildSummaryJson(const SummaryInputs& in) {
         {"criteria", CriteriaJson(in.criteria)},
         {"soft_soil_test",
          in.soft_soil_vci_pa > 0
-             ? json{{"vehicle_cone_index_kpa", Round(in.soft_soil_vci_pa / 1000.0, 0.01)},
+             ? json{{"vehicle_cone_index_kpa", Round(in.soft_soil_vci_pa / 1000.0, 2)},
                     {"passes", in.criteria.passes}}
              : json(nullptr)},
         {"workers", in.workers}}},
-      {"elapsed_s", Round(in.elapsed_s, 0.001)},
+      {"elapsed_s", Round(in.elapsed_s, 3)},
   };
   return summary.dump(2);
 }

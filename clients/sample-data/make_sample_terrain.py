@@ -10,11 +10,12 @@ Files written to --out (all on one grid of --size x --size cells of --cell-m met
 WGS 84 / UTM zone 17N, EPSG:32617, centred on 36.1 N 81.0 W in the Blue Ridge of North Carolina;
 zone 17's central meridian runs through the centre, so grid and ground distances agree to 0.04 %):
 
-    elevation.tif   Float32, metres: smooth hills; Horn slopes span 0 to 60 %
+    elevation.tif   Float32, metres: smooth hills; Horn slopes span 0 to 80 %
     slope.tif       Float32, percent (100 * tan angle): Horn (1981) slope of elevation.tif, computed
                     the way the server does (one-sided differences at the edges)
     cone_index.tif  Float32, kPa: soft wet ground (100-300 kPa) in hollows, firm ground
-                    (1000-3000 kPa) elsewhere; a few cells are nodata (-9999)
+                    (1000-3000 kPa) on the dry ground, a log-linear transition between them;
+                    a few cells are nodata (-9999)
     soil_class.tif  Byte: 1 sand, 2 silt loam, 3 clay (0 = nodata)
     soil_table.json the soil classes with the remolding index the service applies:
                     rating cone index RCI = CI * remolding_index
@@ -36,7 +37,7 @@ EPSG = 32617
 CENTRE_EASTING_M = 500000.0  # zone 17N central meridian, 81 W
 CENTRE_NORTHING_M = 3996000.0  # about 36.1 N
 BASE_ELEVATION_M = 900.0
-MAX_SLOPE_PERCENT = 60.0
+MAX_SLOPE_PERCENT = 80.0
 CONE_NODATA = -9999.0
 SOIL_NODATA = 0
 
@@ -120,13 +121,18 @@ def make_fields(size, cell_m):
     elevation = np.round(elevation, 2)
     slope = np.round(horn_slope_percent(elevation, cell_m), 3)
 
-    # Wetness: high in hollows, plus smooth patches; the wettest 28 % is soft ground.
+    # Wetness: high in hollows, plus smooth patches. The wettest ground is soft, the driest firm, and
+    # the cone index falls log-linearly between them across a transition band (the 55-85 %
+    # wetness quantiles), so that intermediate ground (300-1000 kPa) exists as in the field.
     low = 1.0 - (elevation - elevation.min()) / max(np.ptp(elevation), 1e-9)
     wet = 0.65 * low + 0.35 * blobs(rng, u, v, 20, (0.03, 0.10), signed=False)
-    soft = wet > np.quantile(wet, 0.72)
+    lo_q, hi_q = np.quantile(wet, 0.55), np.quantile(wet, 0.85)
+    t = np.clip((wet - lo_q) / (hi_q - lo_q), 0.0, 1.0)
+    t = t * t * (3.0 - 2.0 * t)  # smoothstep
     soft_kpa = 100.0 + 200.0 * blobs(rng, u, v, 10, (0.04, 0.12), signed=True)
     firm_kpa = 1000.0 + 2000.0 * blobs(rng, u, v, 10, (0.05, 0.15), signed=True)
-    cone = np.round(np.where(soft, soft_kpa, firm_kpa)).astype(np.float32)
+    cone = np.round(np.exp((1.0 - t) * np.log(firm_kpa) + t * np.log(soft_kpa)))
+    cone = cone.astype(np.float32)
 
     # A few nodata cells: two 3 x 3 gaps and scattered single cells.
     for _ in range(2):
@@ -196,10 +202,11 @@ def main(argv):
                       if n.endswith((".tif", ".json")))
     print("wrote %s: %d x %d cells of %g m, EPSG:%d, %.2f MB" %
           (args.out, args.size, args.size, args.cell_m, EPSG, total_bytes / 1e6))
-    print("  slope %.1f to %.1f %%; cone index soft %d-%d kPa, firm %d-%d kPa, %d nodata cells" %
-          (slope.min(), slope.max(), cone[valid & (cone < 500)].min(),
-           cone[valid & (cone < 500)].max(), cone[valid & (cone >= 500)].min(),
-           cone[valid & (cone >= 500)].max(), np.count_nonzero(~valid)))
+    print("  slope %.1f to %.1f %%; cone index %d-%d kPa (%.0f %% below 300, %.0f %% above 1000), "
+          "%d nodata cells" %
+          (slope.min(), slope.max(), cone[valid].min(), cone[valid].max(),
+           100.0 * np.mean(cone[valid] < 300), 100.0 * np.mean(cone[valid] > 1000),
+           np.count_nonzero(~valid)))
     return 0
 
 

@@ -3,13 +3,48 @@
 // worker rank, bad input refused while the pool keeps serving, and a clean SIGTERM shutdown.
 #include <gtest/gtest.h>
 
+#include <dirent.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
 
 #include "server_process.h"
 
 namespace gonogo::testing {
 namespace {
+
+// CPU time (user + system, seconds) of every process whose command line names gonogo-server and
+// whose data directory is `data_dir`: the ranks of this test's MPI job.
+std::map<int, double> RankCpuSeconds(const fs::path& data_dir) {
+  std::map<int, double> out;
+  DIR* proc = opendir("/proc");
+  while (dirent* e = readdir(proc)) {
+    const int pid = std::atoi(e->d_name);
+    if (pid <= 0) continue;
+    std::string cmdline = ReadFile(fs::path("/proc") / e->d_name / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.rfind("mpirun", 0) == 0) continue;
+    if (cmdline.find("gonogo-server") == std::string::npos ||
+        cmdline.find(data_dir.string()) == std::string::npos) {
+      continue;
+    }
+    // /proc/PID/stat: fields 14 and 15 are utime and stime in clock ticks.
+    std::string stat = ReadFile(fs::path("/proc") / e->d_name / "stat");
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    std::string f;
+    double ticks = 0;
+    for (int i = 3; i <= 15 && fields >> f; ++i) {
+      if (i >= 14) ticks += std::stod(f);
+    }
+    out[pid] = ticks / sysconf(_SC_CLK_TCK);
+  }
+  closedir(proc);
+  return out;
+}
 
 TEST(MpiPool, TwoWorkerRanksComputeAMapAndShutDownCleanly) {
   ScratchDir dir("mpi");
@@ -69,6 +104,15 @@ TEST(MpiPool, TwoWorkerRanksComputeAMapAndShutDownCleanly) {
     grpc::ClientContext c;
     curve_req.set_wheel_load_n(9100);
     EXPECT_TRUE(stub->GetTractionCurve(&c, curve_req, &curve).ok()) << "workers still serve";
+  }
+
+  // Idle ranks sleep between polls instead of spinning in a blocking receive.
+  const auto before = RankCpuSeconds(dir.path() / "data");
+  EXPECT_EQ(before.size(), 3u) << "rank 0 and two workers";
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const auto after = RankCpuSeconds(dir.path() / "data");
+  for (const auto& [pid, cpu] : after) {
+    EXPECT_LT(cpu - before.at(pid), 0.2) << "rank process " << pid << " used CPU while idle";
   }
   EXPECT_EQ(server.Terminate(), 0);
 }

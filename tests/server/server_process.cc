@@ -15,8 +15,15 @@
 
 namespace gonogo::testing {
 
-std::string SourceDir() { return std::getenv("GONOGO_SOURCE_DIR"); }
-std::string BinaryDir() { return std::getenv("GONOGO_BINARY_DIR"); }
+// The environment (set by CTest) wins; benchmarks run by hand fall back to the configured tree.
+std::string SourceDir() {
+  const char* env = std::getenv("GONOGO_SOURCE_DIR");
+  return env ? env : GONOGO_DEFAULT_SOURCE_DIR;
+}
+std::string BinaryDir() {
+  const char* env = std::getenv("GONOGO_BINARY_DIR");
+  return env ? env : GONOGO_DEFAULT_BINARY_DIR;
+}
 
 std::string ReadFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
