@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
     const MapRun cold = RunMap(server, terrain);
     const MapRun warm = RunMap(server, terrain);
     const double cells = double(size) * size;
+    std::printf("terrain units %d\n", cold.summary["terrain_units"].get<int>());
     std::printf("%-6s %10s %12s %8s %10s %10s\n", "cache", "seconds", "cells/s", "tasks", "computed",
                 "hits");
     for (const auto& [name, run] : {std::pair{"cold", cold}, std::pair{"warm", warm}}) {
