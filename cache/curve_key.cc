@@ -3,6 +3,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace gonogo::cache {
 
@@ -15,6 +16,15 @@ std::string Fixed(double value, int decimals) {
   return buf;
 }
 }  // namespace
+
+std::string BekkerText(const SoilState& soil) {
+  if (!soil.bekker) return "";
+  const BekkerParameters& b = *soil.bekker;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "n=%.9g,kc=%.9g,kphi=%.9g,c=%.9g,phi_deg=%.9g,K=%.9g", b.n, b.kc,
+                b.kphi, b.cohesion_pa, b.friction_angle_deg, b.shear_deformation_m);
+  return buf;
+}
 
 int ConeIndexBin(double cone_index_pa) {
   if (cone_index_pa <= 0) return INT_MIN;
@@ -36,8 +46,19 @@ TractionRequest Quantise(const TractionRequest& r) {
   q.tyre.deflection_m = Snap(r.tyre.deflection_m, kLengthResolutionM);
   // The rolling radius is always stored explicitly, so "derived" and "given" requests share keys.
   q.tyre.rolling_radius_m = Snap(r.tyre.RollingRadius(), kLengthResolutionM);
+  q.tyre.inflation_pressure_pa = Snap(r.tyre.inflation_pressure_pa, kPressureResolutionPa);
   q.wheel_load_n = Snap(r.wheel_load_n, kLoadResolutionN);
   for (double& s : q.slips) s = Snap(s, kSlipResolution);
+  if (q.soil.bekker) {
+    // Snap to the nine significant digits of the key so the computed curve is the key's curve.
+    BekkerParameters& b = *q.soil.bekker;
+    for (double* v : {&b.n, &b.kc, &b.kphi, &b.cohesion_pa, &b.friction_angle_deg,
+                      &b.shear_deformation_m}) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.9g", *v);
+      *v = std::strtod(buf, nullptr);
+    }
+  }
   return q;
 }
 
@@ -49,7 +70,9 @@ std::string CurveKey(const std::string& tier, const std::string& tier_version,
                     ";h_m=" + Fixed(q.tyre.section_height_m, 4) +
                     ";delta_m=" + Fixed(q.tyre.deflection_m, 4) +
                     ";r_m=" + Fixed(q.tyre.rolling_radius_m, 4) +
-                    ";w_n=" + Fixed(q.wheel_load_n, 0) + ";slips=";
+                    ";pi_pa=" + Fixed(q.tyre.inflation_pressure_pa, 0) +
+                    ";w_n=" + Fixed(q.wheel_load_n, 0) + ";bekker=" + BekkerText(q.soil) +
+                    ";slips=";
   for (size_t i = 0; i < q.slips.size(); ++i) {
     if (i) key += ',';
     key += Fixed(q.slips[i], 6);

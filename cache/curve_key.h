@@ -2,7 +2,8 @@
 //
 // A request is first snapped to the key's resolution and then computed with the snapped values, so a
 // cached curve is exactly the curve of its key: cone index on logarithmic bins 1 % apart, lengths to
-// 0.1 mm, wheel load to 1 N, slips to 1e-6. The tier's version is part of the key, so a solver change
+// 0.1 mm, wheel load to 1 N, inflation pressure to 100 Pa, slips to 1e-6; explicit Bekker parameters
+// enter with nine significant digits. The tier's version is part of the key, so a solver change
 // never serves a stale curve.
 #pragma once
 
@@ -17,6 +18,7 @@ inline constexpr double kConeIndexBinRatio = 1.01;   // adjacent cone-index bins
 inline constexpr double kLengthResolutionM = 1e-4;   // 0.1 mm
 inline constexpr double kLoadResolutionN = 1.0;
 inline constexpr double kSlipResolution = 1e-6;
+inline constexpr double kPressureResolutionPa = 100.0;  // inflation pressure
 
 // Bin of a cone index (Pa). Bin 0 is 1 kPa; INT32_MIN stands for a cone index of exactly 0.
 int ConeIndexBin(double cone_index_pa);
@@ -24,6 +26,8 @@ int ConeIndexBin(double cone_index_pa);
 double ConeIndexOfBin(int bin);
 // Snaps every field of the request to the key's resolution.
 TractionRequest Quantise(const TractionRequest& request);
+// Canonical text of explicit Bekker parameters ("" when none): nine significant digits each.
+std::string BekkerText(const SoilState& soil);
 // Key of an already quantised request.
 std::string CurveKey(const std::string& tier, const std::string& tier_version,
                      const TractionRequest& quantised);

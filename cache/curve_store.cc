@@ -1,6 +1,9 @@
 #include "cache/curve_store.h"
 
+#include <cstdio>
 #include <cstring>
+
+#include "cache/curve_key.h"
 
 namespace gonogo::cache {
 
@@ -31,10 +34,21 @@ std::vector<TractionPoint> UnpackPoints(const std::string& blob) {
   return points;
 }
 
+// Inverse of BekkerText: "" gives no parameters.
+std::optional<BekkerParameters> ParseBekkerText(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  BekkerParameters b;
+  if (std::sscanf(text.c_str(), "n=%lf,kc=%lf,kphi=%lf,c=%lf,phi_deg=%lf,K=%lf", &b.n, &b.kc,
+                  &b.kphi, &b.cohesion_pa, &b.friction_angle_deg, &b.shear_deformation_m) != 6) {
+    throw DatabaseError("unreadable Bekker parameters in the curve cache: " + text);
+  }
+  return b;
+}
+
 constexpr char kColumns[] =
     "id, cache_key, tier, tier_version, soil_name, cone_index_pa, diameter_m, width_m, "
     "section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, computed_by, "
-    "compute_seconds, computed_unix_ms";
+    "compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa";
 
 StoredCurve ReadRow(const Statement& s) {
   StoredCurve c;
@@ -50,6 +64,8 @@ StoredCurve ReadRow(const Statement& s) {
   c.computed_by = s.Text(13);
   c.compute_seconds = s.Double(14);
   c.computed_unix_ms = s.Int(15);
+  c.request.soil.bekker = ParseBekkerText(s.Text(16));
+  c.request.tyre.inflation_pressure_pa = s.Double(17);
   return c;
 }
 
@@ -68,7 +84,8 @@ bool CurveStore::Put(const StoredCurve& c) {
   Statement s = db_.Prepare(
       "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
       "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
-      "computed_by, compute_seconds, computed_unix_ms) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+      "computed_by, compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa) "
+      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const std::string blob = PackPoints(c.curve.points);
   s.Bind(1, c.cache_key).Bind(2, c.curve.tier).Bind(3, c.curve.tier_version);
   s.Bind(4, c.request.soil.soil_name).Bind(5, c.request.soil.cone_index_pa);
@@ -77,6 +94,7 @@ bool CurveStore::Put(const StoredCurve& c) {
   s.Bind(10, c.request.tyre.RollingRadius()).Bind(11, c.request.wheel_load_n);
   s.BindBlob(12, blob.data(), blob.size());
   s.Bind(13, c.computed_by).Bind(14, c.compute_seconds).Bind(15, c.computed_unix_ms);
+  s.Bind(16, BekkerText(c.request.soil)).Bind(17, c.request.tyre.inflation_pressure_pa);
   s.Run();
   const bool written = db_.Changes() > 0;
   tx.Commit();

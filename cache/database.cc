@@ -49,6 +49,11 @@ const std::vector<std::string>& Migrations() {
       );
       CREATE INDEX jobs_by_state ON jobs (state);
       )sql",
+      // 1 -> 2: Bekker parameters and inflation pressure of the bekker tier's curves.
+      R"sql(
+      ALTER TABLE curves ADD COLUMN bekker TEXT NOT NULL DEFAULT '';
+      ALTER TABLE curves ADD COLUMN inflation_pressure_pa REAL NOT NULL DEFAULT 0;
+      )sql",
   };
   return kMigrations;
 }

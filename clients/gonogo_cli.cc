@@ -41,8 +41,11 @@ const char* kUsage =
     "  cancel    ID                          cancel a queued or running job\n"
     "  download  ID --out DIR                fetch a finished job's products\n"
     "  curve     --tier T (--vehicle FILE [--axle N] | --wheel-diameter M --wheel-width M\n"
-    "            --section-height M --deflection M --wheel-load N [--rolling-radius M])\n"
-    "            --cone-index KPA [--soil NAME] [--slip-step S] [--csv]\n"
+    "            [--section-height M --deflection M] --wheel-load N [--rolling-radius M]\n"
+    "            [--inflation-pressure-kpa P]) (--cone-index KPA | --soil NAME |\n"
+    "            --bekker n=N,kc=KC,kphi=KPHI,c=C,phi_deg=PHI,K=K) [--slip-step S] [--csv]\n"
+    "            Bekker parameters in SI: kc N/m^(n+1), kphi N/m^(n+2), c Pa, phi degrees, K m;\n"
+    "            without --section-height the wheel is rigid (h = d/4 is sent, deflection 0)\n"
     "The server defaults to $GONOGO_SERVER, else 127.0.0.1:50051.\n";
 
 class UsageError : public std::runtime_error {
@@ -337,12 +340,48 @@ int Download(Client& client, const Args& a) {
   return 0;
 }
 
+// "n=0.7,kc=5270,kphi=1515040,c=1300,phi_deg=31.1,K=0.0115" -> parameters; every key exactly once.
+v1::BekkerParameters ParseBekker(const std::string& text) {
+  std::map<std::string, double> values;
+  std::istringstream items(text);
+  for (std::string item; std::getline(items, item, ',');) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) throw UsageError("--bekker: '" + item + "' is not KEY=VALUE");
+    const std::string key = item.substr(0, eq);
+    try {
+      size_t used = 0;
+      values[key] = std::stod(item.substr(eq + 1), &used);
+      if (used != item.size() - eq - 1) throw std::invalid_argument("");
+    } catch (const std::logic_error&) {
+      throw UsageError("--bekker: " + key + " needs a number");
+    }
+  }
+  const std::vector<std::string> keys = {"n", "kc", "kphi", "c", "phi_deg", "K"};
+  for (const auto& k : keys) {
+    if (!values.count(k)) throw UsageError("--bekker: " + k + "= is missing");
+  }
+  if (values.size() != keys.size()) {
+    throw UsageError("--bekker: only n, kc, kphi, c, phi_deg and K are known");
+  }
+  v1::BekkerParameters p;
+  p.set_n(values["n"]);
+  p.set_kc(values["kc"]);
+  p.set_kphi(values["kphi"]);
+  p.set_cohesion_pa(values["c"]);
+  p.set_friction_angle_deg(values["phi_deg"]);
+  p.set_shear_deformation_m(values["K"]);
+  return p;
+}
+
 int Curve(Client& client, const Args& a) {
   v1::GetTractionCurveRequest req;
   req.set_tier(a.Need("tier"));
-  req.mutable_soil()->set_cone_index_pa(a.Number("cone-index", NAN) * 1000.0);
-  if (!a.Has("cone-index")) throw UsageError("--cone-index KPA is required");
+  if (!a.Has("cone-index") && !a.Has("soil") && !a.Has("bekker")) {
+    throw UsageError("give the soil: --cone-index KPA, --soil NAME or --bekker ...");
+  }
+  if (a.Has("cone-index")) req.mutable_soil()->set_cone_index_pa(a.Number("cone-index", 0) * 1000.0);
   req.mutable_soil()->set_soil_name(a.Get("soil"));
+  if (a.Has("bekker")) *req.mutable_soil()->mutable_bekker() = ParseBekker(a.Get("bekker"));
   req.set_slip_step(a.Number("slip-step", 0));
   if (a.Has("vehicle")) {
     const auto vehicle = ReadJson<v1::Vehicle>(a.Get("vehicle"), "vehicle file");
@@ -362,10 +401,13 @@ int Curve(Client& client, const Args& a) {
     v1::Tyre* t = req.mutable_tyre();
     t->set_diameter_m(a.Number("wheel-diameter", NAN));
     t->set_width_m(a.Number("wheel-width", NAN));
-    t->set_section_height_m(a.Number("section-height", NAN));
+    // A rigid wheel has no section height: a quarter of the diameter stands in (it only enters
+    // the empirical tier's deflection ratio, which is 0 for a rigid wheel).
+    t->set_section_height_m(a.Number("section-height", 0.25 * t->diameter_m()));
     t->set_deflection_m(a.Number("deflection", 0));
     t->set_rolling_radius_m(a.Number("rolling-radius", 0));
-    for (const char* k : {"wheel-diameter", "wheel-width", "section-height", "wheel-load"}) {
+    t->set_inflation_pressure_pa(a.Number("inflation-pressure-kpa", 0) * 1000.0);
+    for (const char* k : {"wheel-diameter", "wheel-width", "wheel-load"}) {
       if (!a.Has(k)) throw UsageError(std::string("--") + k + " is required without --vehicle");
     }
     req.set_wheel_load_n(a.Number("wheel-load", NAN));
@@ -385,9 +427,12 @@ int Curve(Client& client, const Args& a) {
     }
   } else {
     std::cout << "tier " << p.tier() << " (" << p.tier_version() << "), wheel load "
-              << curve.wheel_load_n() << " N, cone index " << curve.soil().cone_index_pa() / 1000
-              << " kPa, " << (p.cache_hit() ? "from the cache" : "computed") << " by "
-              << p.computed_by() << "\n";
+              << curve.wheel_load_n() << " N, ";
+    if (!curve.soil().soil_name().empty()) std::cout << "soil " << curve.soil().soil_name() << ", ";
+    if (curve.soil().has_bekker()) std::cout << "explicit Bekker parameters, ";
+    std::cout << "cone index " << curve.soil().cone_index_pa() / 1000 << " kPa, "
+              << (p.cache_hit() ? "from the cache" : "computed") << " by " << p.computed_by()
+              << "\n";
     std::cout << std::right << std::setw(6) << "slip" << std::setw(14) << "drawbar_N"
               << std::setw(14) << "torque_Nm" << std::setw(12) << "sinkage_m" << std::setw(12)
               << "efficiency" << "\n";

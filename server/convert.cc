@@ -5,8 +5,42 @@
 namespace gonogo::server {
 
 TyreGeometry FromProto(const v1::Tyre& t) {
-  return TyreGeometry{t.diameter_m(), t.width_m(), t.section_height_m(), t.deflection_m(),
-                      t.rolling_radius_m()};
+  return TyreGeometry{t.diameter_m(),   t.width_m(),          t.section_height_m(),
+                      t.deflection_m(), t.rolling_radius_m(), t.inflation_pressure_pa()};
+}
+
+std::optional<BekkerParameters> BekkerFromProto(bool present, const v1::BekkerParameters& p) {
+  if (!present) return std::nullopt;
+  return BekkerParameters{p.n(),           p.kc(),
+                          p.kphi(),        p.cohesion_pa(),
+                          p.friction_angle_deg(), p.shear_deformation_m()};
+}
+
+v1::BekkerParameters ToProto(const BekkerParameters& b) {
+  v1::BekkerParameters p;
+  p.set_n(b.n);
+  p.set_kc(b.kc);
+  p.set_kphi(b.kphi);
+  p.set_cohesion_pa(b.cohesion_pa);
+  p.set_friction_angle_deg(b.friction_angle_deg);
+  p.set_shear_deformation_m(b.shear_deformation_m);
+  return p;
+}
+
+SoilState FromProto(const v1::SoilState& p) {
+  SoilState s;
+  s.cone_index_pa = p.cone_index_pa();
+  s.soil_name = p.soil_name();
+  s.bekker = BekkerFromProto(p.has_bekker(), p.bekker());
+  return s;
+}
+
+v1::SoilState ToProto(const SoilState& s) {
+  v1::SoilState p;
+  p.set_cone_index_pa(s.cone_index_pa);
+  p.set_soil_name(s.soil_name);
+  if (s.bekker) *p.mutable_bekker() = ToProto(*s.bekker);
+  return p;
 }
 
 v1::Tyre ToProto(const TyreGeometry& t) {
@@ -16,6 +50,7 @@ v1::Tyre ToProto(const TyreGeometry& t) {
   p.set_section_height_m(t.section_height_m);
   p.set_deflection_m(t.deflection_m);
   p.set_rolling_radius_m(t.rolling_radius_m);
+  p.set_inflation_pressure_pa(t.inflation_pressure_pa);
   return p;
 }
 
@@ -86,8 +121,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   r->set_tier(t.tier);
   *r->mutable_tyre() = ToProto(t.request.tyre);
   r->set_wheel_load_n(t.request.wheel_load_n);
-  r->mutable_soil()->set_cone_index_pa(t.request.soil.cone_index_pa);
-  r->mutable_soil()->set_soil_name(t.request.soil.soil_name);
+  *r->mutable_soil() = ToProto(t.request.soil);
   for (double s : t.request.slips) w.add_slips(s);
   return w;
 }
@@ -99,8 +133,7 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.tier = w.request().tier();
   t.request.tyre = FromProto(w.request().tyre());
   t.request.wheel_load_n = w.request().wheel_load_n();
-  t.request.soil.cone_index_pa = w.request().soil().cone_index_pa();
-  t.request.soil.soil_name = w.request().soil().soil_name();
+  t.request.soil = FromProto(w.request().soil());
   t.request.slips.assign(w.slips().begin(), w.slips().end());
   return t;
 }

@@ -2,6 +2,8 @@
 // that names the offending field. The one place where defaults of the API ("0 means ...") are applied.
 #pragma once
 
+#include <optional>
+
 #include "gonogo/v1/mobility.pb.h"
 #include "gonogo/v1/worker.pb.h"
 #include "server/worker_pool.h"
@@ -14,6 +16,11 @@ namespace gonogo::server {
 TyreGeometry FromProto(const v1::Tyre& tyre);
 v1::Tyre ToProto(const TyreGeometry& tyre);
 TractionPoint FromProto(const v1::TractionPoint& point);
+// Bekker parameters of a message that has them, else nullopt.
+std::optional<BekkerParameters> BekkerFromProto(bool present, const v1::BekkerParameters& p);
+v1::BekkerParameters ToProto(const BekkerParameters& b);
+SoilState FromProto(const v1::SoilState& soil);
+v1::SoilState ToProto(const SoilState& soil);
 v1::TractionPoint ToProto(const TractionPoint& point);
 
 // Throws InputError naming "vehicle.<field>".

@@ -72,7 +72,8 @@ std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
     const double ri = c.remolding_index() == 0 ? 1.0 : c.remolding_index();
     Require(std::isfinite(ri) && ri > 0 && ri <= 2, field + ".remolding_index",
             "must lie in (0, 2]");
-    out[c.code()] = SoilClassInfo{c.name(), ri};
+    out[c.code()] = SoilClassInfo{c.name(), ri, BekkerFromProto(c.has_bekker(), c.bekker())};
+    if (out[c.code()].bekker) out[c.code()].bekker->Validate(field + ".bekker.");
   }
   return out;
 }
@@ -134,13 +135,23 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
   const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
   CriteriaFromProto(request.criteria());
   Require(!request.tier().empty(), "tier", "is missing");
-  tiers_.Get(request.tier());
+  const TractionTier& tier = tiers_.Get(request.tier());
   Require(!inputs.cone_index.empty(), "cone_index", "the cone-index raster is required");
   Require(inputs.slope.empty() != inputs.elevation.empty(), "slope",
           "send exactly one of a slope raster or an elevation raster");
   Require(inputs.soil_class.empty() || request.soil_table().classes_size() > 0, "soil_table",
           "is required with a soil-class raster");
   const auto soil_table = SoilTableOf(request.soil_table());
+  if (tier.UsesSoilName()) {
+    // Cone-index-only terrain stays on the empirical tier unless the user maps soils.
+    Require(!inputs.soil_class.empty(), "soil_class",
+            "the " + tier.Name() + " tier needs a soil-class raster and a soil table that names "
+            "library soils or gives their parameters");
+    for (const auto& [code, info] : soil_table) {
+      tier.ValidateSoil(SoilState{0, info.name, info.bekker},
+                        "soil_table.classes[code " + std::to_string(code) + "]");
+    }
+  }
 
   geo::TerrainInputs t;
   t.cone_index.bytes = ReadFile(inputs.cone_index);

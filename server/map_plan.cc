@@ -41,7 +41,8 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
                          static_cast<uint32_t>(bin);
     auto [it, inserted] = unit_of_key.try_emplace(key, static_cast<int32_t>(plan.units.size()));
     if (inserted) {
-      plan.units.push_back(TerrainUnit{code, soil->name, cache::ConeIndexOfBin(bin), 0});
+      plan.units.push_back(
+          TerrainUnit{code, soil->name, soil->bekker, cache::ConeIndexOfBin(bin), 0});
     }
     plan.units[it->second].cells++;
     plan.cell_unit[c] = it->second;
@@ -54,7 +55,10 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
     for (size_t a = 0; a < vehicle.axles.size(); ++a) {
       TractionRequest r;
       r.soil.cone_index_pa = plan.units[u].rating_cone_index_pa;
-      r.soil.soil_name = tier.UsesSoilName() ? plan.units[u].soil_name : "";
+      if (tier.UsesSoilName()) {
+        r.soil.soil_name = plan.units[u].soil_name;
+        r.soil.bekker = plan.units[u].bekker;
+      }
       r.tyre = vehicle.axles[a].tyre;
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;

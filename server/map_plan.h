@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,11 +19,13 @@ namespace gonogo::server {
 struct SoilClassInfo {
   std::string name;
   double remolding_index = 1.0;  // RCI = CI * RI
+  std::optional<BekkerParameters> bekker;  // explicit parameters for the bekker tier
 };
 
 struct TerrainUnit {
   int32_t soil_code = -1;        // -1 when there is no soil raster
   std::string soil_name;
+  std::optional<BekkerParameters> bekker;
   double rating_cone_index_pa = 0;  // quantised (cache bin)
   int64_t cells = 0;
 };

@@ -30,8 +30,7 @@ const char* RoleFileName(v1::RasterRole role) {
 void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
   *out->mutable_tyre() = ToProto(s.request.tyre);
   out->set_wheel_load_n(s.request.wheel_load_n);
-  out->mutable_soil()->set_cone_index_pa(s.request.soil.cone_index_pa);
-  out->mutable_soil()->set_soil_name(s.request.soil.soil_name);
+  *out->mutable_soil() = ToProto(s.request.soil);
   for (const TractionPoint& p : s.curve.points) *out->add_points() = ToProto(p);
   v1::Provenance* prov = out->mutable_provenance();
   prov->set_tier(s.curve.tier);
@@ -238,10 +237,14 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     TractionRequest r;
     r.tyre = FromProto(request->tyre());
     r.wheel_load_n = request->wheel_load_n();
-    r.soil.cone_index_pa = request->soil().cone_index_pa();
-    r.soil.soil_name = tier.UsesSoilName() ? request->soil().soil_name() : "";
+    r.soil = FromProto(request->soil());
+    if (!tier.UsesSoilName()) {
+      r.soil.soil_name.clear();
+      r.soil.bekker.reset();
+    }
     r.slips = TractionRequest::SlipSweep(request->slip_step() == 0 ? 0.05 : request->slip_step());
     r.Validate();
+    tier.ValidateSoil(r.soil, "soil");
     const TractionRequest q = cache::Quantise(r);
     const std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
     if (auto found = curves_.Find(key)) {

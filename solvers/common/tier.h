@@ -28,8 +28,12 @@ class TractionTier {
   virtual std::string Name() const = 0;
   // Bumped whenever the numbers a tier returns could change; part of every cache key.
   virtual std::string Version() const = 0;
-  // False when the tier reads only the cone index (its cache keys then ignore the soil name).
+  // False when the tier reads only the cone index (its cache keys then ignore the soil name and
+  // the Bekker parameters).
   virtual bool UsesSoilName() const { return false; }
+  // Checks, before any work is queued, that the tier can resolve this soil (library name, explicit
+  // parameters); throws InputError naming `field`. Cheap: no solver work.
+  virtual void ValidateSoil(const SoilState& /*soil*/, const std::string& /*field*/) const {}
   // Computes one curve. Throws InputError for requests the tier cannot take; thread-safe.
   virtual TractionCurve Compute(const TractionRequest& request) const = 0;
   // As Compute(), polling `cancelled` where the tier can stop early. Tiers whose curves take

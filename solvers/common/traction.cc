@@ -26,11 +26,29 @@ void TyreGeometry::Validate(const std::string& p) const {
           "must be zero (derived) or a positive number of metres");
   Require(rolling_radius_m <= 0.5 * diameter_m, p + "rolling_radius_m",
           "must not exceed half the diameter");
+  Require(std::isfinite(inflation_pressure_pa) && inflation_pressure_pa >= 0,
+          p + "inflation_pressure_pa", "must be zero (not given) or a positive pressure in Pa");
+}
+
+void BekkerParameters::Validate(const std::string& p) const {
+  Require(std::isfinite(n) && n > 0 && n <= 3, p + "n", "sinkage exponent must lie in (0, 3]");
+  Require(std::isfinite(kc), p + "kc", "must be a finite modulus in N/m^(n+1)");
+  Require(std::isfinite(kphi) && kphi >= 0, p + "kphi",
+          "must be a non-negative modulus in N/m^(n+2)");
+  Require(kc >= 0, p + "kc", "must not be negative");
+  Require(kc > 0 || kphi > 0, p + "kphi", "kc and kphi cannot both be zero");
+  Require(std::isfinite(cohesion_pa) && cohesion_pa >= 0, p + "cohesion_pa",
+          "must be a non-negative stress in Pa");
+  Require(std::isfinite(friction_angle_deg) && friction_angle_deg > 0 && friction_angle_deg < 90,
+          p + "friction_angle_deg", "must lie in (0, 90) degrees");
+  Require(std::isfinite(shear_deformation_m) && shear_deformation_m > 0,
+          p + "shear_deformation_m", "must be a positive length in m");
 }
 
 void SoilState::Validate(const std::string& p) const {
   Require(std::isfinite(cone_index_pa), p + "cone_index_pa", "must be a finite number (got NaN or inf)");
   Require(cone_index_pa >= 0, p + "cone_index_pa", "must not be negative");
+  if (bekker) bekker->Validate(p + "bekker.");
 }
 
 void TractionRequest::Validate() const {

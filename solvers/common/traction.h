@@ -2,6 +2,7 @@
 // TractionCurve it answers with (ARCHITECTURE section 1). Plain data, SI units in every name.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,8 +15,22 @@ struct TyreGeometry {
   double section_height_m = 0;   // section height [h]
   double deflection_m = 0;       // vertical deflection under load [delta]
   double rolling_radius_m = 0;   // rolling radius used for torque and slip [r]; 0 = d/2 - delta
+  double inflation_pressure_pa = 0;  // gauge inflation pressure [p_i], Pa; 0 = not given
 
   double RollingRadius() const { return rolling_radius_m > 0 ? rolling_radius_m : 0.5 * diameter_m - deflection_m; }
+  void Validate(const std::string& field_prefix) const;
+};
+
+// Bekker-Wong pressure-sinkage and Janosi-Hanamoto shear parameters of a soil, SI units throughout.
+// p = (kc / b + kphi) z^n;  tau = (c + sigma tan phi) (1 - exp(-j / K)).
+struct BekkerParameters {
+  double n = 0;                       // sinkage exponent, -
+  double kc = 0;                      // cohesive modulus k_c, N/m^(n+1)
+  double kphi = 0;                    // frictional modulus k_phi, N/m^(n+2)
+  double cohesion_pa = 0;             // c, Pa
+  double friction_angle_deg = 0;      // phi, degrees
+  double shear_deformation_m = 0;     // Janosi-Hanamoto shear deformation modulus K, m
+
   void Validate(const std::string& field_prefix) const;
 };
 
@@ -23,6 +38,7 @@ struct TyreGeometry {
 struct SoilState {
   double cone_index_pa = 0;      // cone index [CI], Pa
   std::string soil_name;         // soil-library name, empty when only the cone index is known
+  std::optional<BekkerParameters> bekker;  // explicit parameters; override the library entry
 
   void Validate(const std::string& field_prefix) const;
 };

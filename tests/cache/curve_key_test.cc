@@ -63,6 +63,14 @@ TEST(CurveKey, EveryInputChangesTheKey) {
   r = Request();
   r.soil.soil_name = "LETE sand";
   EXPECT_NE(base, CurveKey("empirical", "e1", Quantise(r))) << "soil";
+  r = Request();
+  r.tyre.inflation_pressure_pa = 200e3;
+  EXPECT_NE(base, CurveKey("empirical", "e1", Quantise(r))) << "inflation pressure";
+  r = Request();
+  r.soil.bekker = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115};
+  const std::string with_bekker = CurveKey("bekker", "b1", Quantise(r));
+  r.soil.bekker->kphi *= 1.0001;
+  EXPECT_NE(with_bekker, CurveKey("bekker", "b1", Quantise(r))) << "Bekker parameters";
 }
 
 }  // namespace

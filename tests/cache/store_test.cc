@@ -50,10 +50,63 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 1);
+  EXPECT_EQ(db.SchemaVersion(), 2);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
+}
+
+TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
+  // A cache written by schema version 1 (before Bekker parameters were stored).
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path_.c_str(), &raw), SQLITE_OK);
+  const char* v1 = R"sql(
+    CREATE TABLE curves (id INTEGER PRIMARY KEY, cache_key TEXT NOT NULL UNIQUE, tier TEXT NOT NULL,
+      tier_version TEXT NOT NULL, soil_name TEXT NOT NULL, cone_index_pa REAL NOT NULL,
+      diameter_m REAL NOT NULL, width_m REAL NOT NULL, section_height_m REAL NOT NULL,
+      deflection_m REAL NOT NULL, rolling_radius_m REAL NOT NULL, wheel_load_n REAL NOT NULL,
+      points BLOB NOT NULL, computed_by TEXT NOT NULL, compute_seconds REAL NOT NULL,
+      computed_unix_ms INTEGER NOT NULL);
+    CREATE TABLE jobs (id TEXT PRIMARY KEY, name TEXT NOT NULL, tier TEXT NOT NULL,
+      state INTEGER NOT NULL, fraction_done REAL NOT NULL DEFAULT 0,
+      tasks_done INTEGER NOT NULL DEFAULT 0, tasks_total INTEGER NOT NULL DEFAULT 0,
+      cache_hits INTEGER NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '',
+      request BLOB NOT NULL, summary_json TEXT NOT NULL DEFAULT '',
+      products TEXT NOT NULL DEFAULT '', created_unix_ms INTEGER NOT NULL,
+      finished_unix_ms INTEGER NOT NULL DEFAULT 0);
+    INSERT INTO curves VALUES (1, 'old-key', 'empirical', 'empirical-1', '', 149000, 1.011, 0.335,
+      0.2178, 0.0327, 0.4728, 14513, x'', 'thread', 0.001, 77);
+    PRAGMA user_version = 1;)sql";
+  ASSERT_EQ(sqlite3_exec(raw, v1, nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(raw);
+
+  Database db(path_);
+  EXPECT_EQ(db.SchemaVersion(), 2);
+  CurveStore store(db);
+  auto old = store.Find("old-key");
+  ASSERT_TRUE(old.has_value());
+  EXPECT_EQ(old->computed_unix_ms, 77);
+  EXPECT_FALSE(old->request.soil.bekker.has_value());
+  EXPECT_EQ(old->request.tyre.inflation_pressure_pa, 0.0);
+}
+
+TEST_F(StoreTest, BekkerParametersRoundTrip) {
+  StoredCurve c = Curve(0, 5);
+  c.request.soil.soil_name = "LETE sand";
+  c.request.soil.bekker = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115};
+  c.request.tyre.inflation_pressure_pa = 200000;
+  c.request = Quantise(c.request);
+  c.cache_key = CurveKey("bekker", "bekker-1", c.request);
+  Database db(path_);
+  CurveStore store(db);
+  ASSERT_TRUE(store.Put(c));
+  auto back = store.Find(c.cache_key);
+  ASSERT_TRUE(back.has_value() && back->request.soil.bekker.has_value());
+  EXPECT_DOUBLE_EQ(back->request.soil.bekker->kphi, 1515040);
+  EXPECT_DOUBLE_EQ(back->request.soil.bekker->shear_deformation_m, 0.0115);
+  EXPECT_DOUBLE_EQ(back->request.tyre.inflation_pressure_pa, 200000);
+  EXPECT_EQ(CurveKey("bekker", "bekker-1", Quantise(back->request)), c.cache_key)
+      << "a stored curve's request gives back its own key";
 }
 
 TEST_F(StoreTest, RefusesADatabaseNewerThanTheCode) {

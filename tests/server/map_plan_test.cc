@@ -34,7 +34,7 @@ geo::TerrainLayers Terrain() {
 
 TEST(PlanMap, CellsWithTheSameSoilAndBinShareAUnit) {
   terramech::EmpiricalTier tier;
-  const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0}}, {2, {"clay", 0.5}}};
+  const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0, std::nullopt}}, {2, {"clay", 0.5, std::nullopt}}};
   const MapPlan plan = PlanMap(Terrain(), Vehicle(), soils, tier, TractionRequest::SlipSweep(0.05));
   EXPECT_EQ(plan.cell_unit[0], plan.cell_unit[1]);
   EXPECT_EQ(plan.cell_unit[0], plan.cell_unit[2]) << "300.4 kPa falls in the 300 kPa bin";
@@ -51,7 +51,7 @@ TEST(PlanMap, CellsWithTheSameSoilAndBinShareAUnit) {
 TEST(PlanMap, UnknownSoilClassNamesTheCell) {
   terramech::EmpiricalTier tier;
   try {
-    PlanMap(Terrain(), Vehicle(), {{1, {"sand", 1.0}}}, tier, {0, 0.5, 1});
+    PlanMap(Terrain(), Vehicle(), {{1, {"sand", 1.0, std::nullopt}}}, tier, {0, 0.5, 1});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "soil_class");
@@ -62,7 +62,7 @@ TEST(PlanMap, UnknownSoilClassNamesTheCell) {
 TEST(EvaluateMap, SteepAndNoDataCellsAreClassified) {
   terramech::EmpiricalTier tier;
   const auto terrain = Terrain();
-  const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0}}, {2, {"clay", 1.0}}};
+  const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0, std::nullopt}}, {2, {"clay", 1.0, std::nullopt}}};
   const MapPlan plan = PlanMap(terrain, Vehicle(), soils, tier, TractionRequest::SlipSweep(0.05));
   std::vector<TractionCurve> curves;
   for (const auto& t : plan.tasks) curves.push_back(tier.Compute(t));

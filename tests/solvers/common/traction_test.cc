@@ -26,7 +26,7 @@ TEST(TractionRequest, SlipSweepEndsAtOneAndIsEven) {
 }
 
 TEST(TractionRequest, ValidateNamesTheField) {
-  TractionRequest r{{300e3, ""}, FedAlphaTyre(), 13438, {0, 0.2}};
+  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}};
   EXPECT_NO_THROW(r.Validate());
   r.soil.cone_index_pa = NAN;
   try {
