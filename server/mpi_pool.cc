@@ -69,11 +69,7 @@ void MpiPool::Submit(TaskSpec task, TaskCallback done) {
       return;
     }
   }
-  TaskResult r;
-  r.task_id = task.task_id;
-  r.cancelled = true;
-  r.error = "worker pool is shutting down";
-  done(std::move(r));
+  done(CancelledResult(task.task_id, kShuttingDown));
 }
 
 void MpiPool::Cancel(uint64_t task_id) {
@@ -117,11 +113,7 @@ void MpiPool::CommLoop() {
     }
     bool did_work = !to_send.empty() || !cancelled_queued.empty();
     for (Entry& e : cancelled_queued) {
-      TaskResult r;
-      r.task_id = e.task.task_id;
-      r.cancelled = true;
-      r.error = stopping ? "worker pool is shutting down" : "cancelled";
-      e.done(std::move(r));
+      e.done(CancelledResult(e.task.task_id, stopping ? kShuttingDown : "cancelled"));
     }
     for (const auto& [rank, bytes] : to_send) Send(bytes, rank, kTagTask);
     // Cancellation of running tasks, and of every running task while stopping.

@@ -25,11 +25,7 @@ void ThreadPool::Submit(TaskSpec task, TaskCallback done) {
       return;
     }
   }
-  TaskResult r;
-  r.task_id = task.task_id;
-  r.cancelled = true;
-  r.error = "worker pool is shutting down";
-  done(std::move(r));
+  done(CancelledResult(task.task_id, kShuttingDown));
 }
 
 void ThreadPool::Cancel(uint64_t task_id) {
@@ -47,11 +43,7 @@ void ThreadPool::Cancel(uint64_t task_id) {
     done = std::move(it->done);
     queue_.erase(it);
   }
-  TaskResult r;
-  r.task_id = task_id;
-  r.cancelled = true;
-  r.error = "cancelled";
-  done(std::move(r));
+  done(CancelledResult(task_id, "cancelled"));
 }
 
 void ThreadPool::Loop() {
@@ -85,13 +77,7 @@ void ThreadPool::Shutdown() {
     for (auto& [id, flag] : running_) flag->store(true);
     wake_.notify_all();
   }
-  for (Entry& e : dropped) {
-    TaskResult r;
-    r.task_id = e.task.task_id;
-    r.cancelled = true;
-    r.error = "worker pool is shutting down";
-    e.done(std::move(r));
-  }
+  for (Entry& e : dropped) e.done(CancelledResult(e.task.task_id, kShuttingDown));
   for (auto& t : threads_) t.join();
   threads_.clear();
 }

@@ -30,6 +30,17 @@ struct TaskResult {
 
 using TaskCallback = std::function<void(TaskResult)>;
 
+// The result of a task that was cancelled or dropped before it could finish.
+inline TaskResult CancelledResult(uint64_t task_id, std::string why) {
+  TaskResult r;
+  r.task_id = task_id;
+  r.cancelled = true;
+  r.error = std::move(why);
+  return r;
+}
+
+inline constexpr char kShuttingDown[] = "worker pool is shutting down";
+
 class WorkerPool {
  public:
   virtual ~WorkerPool() = default;
