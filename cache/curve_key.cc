@@ -80,4 +80,17 @@ std::string CurveKey(const std::string& tier, const std::string& tier_version,
   return key;
 }
 
+std::string SimilarityGroup(const std::string& tier, const std::string& tier_version,
+                            const TractionRequest& q) {
+  std::string group = "gonogo-similar-v1;tier=" + tier + ";version=" + tier_version +
+                      ";soil=" + q.soil.soil_name + ";ci_pa=" + Fixed(q.soil.cone_index_pa, 2) +
+                      ";pi_pa=" + Fixed(q.tyre.inflation_pressure_pa, 0) +
+                      ";bekker=" + BekkerText(q.soil) + ";slips=";
+  for (size_t i = 0; i < q.slips.size(); ++i) {
+    if (i) group += ',';
+    group += Fixed(q.slips[i], 6);
+  }
+  return group;
+}
+
 }  // namespace gonogo::cache

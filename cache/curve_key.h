@@ -32,4 +32,10 @@ std::string BekkerText(const SoilState& soil);
 std::string CurveKey(const std::string& tier, const std::string& tier_version,
                      const TractionRequest& quantised);
 
+// Everything a curve depends on except the tyre's size and its load: curves in one group are on
+// the same soil with the same procedure, so they can stand in for each other when their pi-terms
+// match (solvers/mobility/similarity.h).
+std::string SimilarityGroup(const std::string& tier, const std::string& tier_version,
+                            const TractionRequest& quantised);
+
 }  // namespace gonogo::cache

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "cache/curve_key.h"
+#include "solvers/mobility/similarity.h"
 
 namespace gonogo::cache {
 
@@ -84,8 +85,9 @@ bool CurveStore::Put(const StoredCurve& c) {
   Statement s = db_.Prepare(
       "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
       "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
-      "computed_by, compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa) "
-      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+      "computed_by, compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa, "
+      "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa) "
+      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const std::string blob = PackPoints(c.curve.points);
   s.Bind(1, c.cache_key).Bind(2, c.curve.tier).Bind(3, c.curve.tier_version);
   s.Bind(4, c.request.soil.soil_name).Bind(5, c.request.soil.cone_index_pa);
@@ -95,10 +97,38 @@ bool CurveStore::Put(const StoredCurve& c) {
   s.BindBlob(12, blob.data(), blob.size());
   s.Bind(13, c.computed_by).Bind(14, c.compute_seconds).Bind(15, c.computed_unix_ms);
   s.Bind(16, BekkerText(c.request.soil)).Bind(17, c.request.tyre.inflation_pressure_pa);
+  const mobility::PiTerms pi = mobility::ComputePiTerms(c.request);
+  s.Bind(18, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request));
+  s.Bind(19, pi.width_over_diameter).Bind(20, pi.deflection_over_height);
+  s.Bind(21, pi.load_over_bd_pa);
   s.Run();
   const bool written = db_.Changes() > 0;
   tx.Commit();
   return written;
+}
+
+std::optional<StoredCurve> CurveStore::FindSimilar(const std::string& group,
+                                                   const TractionRequest& q, double tolerance,
+                                                   double min_scale_ratio) {
+  const mobility::PiTerms want = mobility::ComputePiTerms(q);
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare(std::string("SELECT ") + kColumns +
+                            ", pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa FROM curves "
+                            "WHERE similarity_group = ? AND pi_load_over_bd_pa BETWEEN ? AND ?");
+  s.Bind(1, group).Bind(2, want.load_over_bd_pa * (1 - tolerance));
+  s.Bind(3, want.load_over_bd_pa * (1 + tolerance));
+  std::optional<StoredCurve> best;
+  double best_ratio = 0;
+  while (s.Step()) {
+    const mobility::PiTerms have{s.Double(18), s.Double(19), s.Double(20)};
+    if (!mobility::PiTermsMatch(want, have, tolerance)) continue;
+    const double d = s.Double(6);
+    const double ratio = std::min(d, q.tyre.diameter_m) / std::max(d, q.tyre.diameter_m);
+    if (ratio < min_scale_ratio || ratio <= best_ratio) continue;
+    best = ReadRow(s);
+    best_ratio = ratio;
+  }
+  return best;
 }
 
 CurvePage CurveStore::List(const CurveFilter& f, int page_size, int64_t before_id) {

@@ -41,6 +41,11 @@ class CurveStore {
   // Inserts the curve in its own transaction; a curve already stored under the key is kept.
   // Returns true when a row was written.
   bool Put(const StoredCurve& curve);
+  // A stored curve of the same similarity group whose pi-terms match the request's and whose
+  // diameter ratio (smaller over larger) is at least `min_scale_ratio`; the closest in size wins.
+  std::optional<StoredCurve> FindSimilar(const std::string& similarity_group,
+                                         const TractionRequest& quantised, double tolerance,
+                                         double min_scale_ratio);
   // Newest first; `before_id` 0 starts at the newest.
   CurvePage List(const CurveFilter& filter, int page_size, int64_t before_id);
   int64_t Count();

@@ -54,6 +54,16 @@ const std::vector<std::string>& Migrations() {
       ALTER TABLE curves ADD COLUMN bekker TEXT NOT NULL DEFAULT '';
       ALTER TABLE curves ADD COLUMN inflation_pressure_pa REAL NOT NULL DEFAULT 0;
       )sql",
+      // 2 -> 3: the pi-terms of seed 001 for similarity lookups. Rows of earlier versions keep an
+      // empty group and are never used as similarity sources.
+      R"sql(
+      ALTER TABLE curves ADD COLUMN similarity_group TEXT NOT NULL DEFAULT '';
+      ALTER TABLE curves ADD COLUMN pi_b_over_d REAL NOT NULL DEFAULT 0;
+      ALTER TABLE curves ADD COLUMN pi_delta_over_h REAL NOT NULL DEFAULT 0;
+      ALTER TABLE curves ADD COLUMN pi_load_over_bd_pa REAL NOT NULL DEFAULT 0;
+      CREATE INDEX curves_by_similarity ON curves (similarity_group, pi_load_over_bd_pa);
+      ALTER TABLE jobs ADD COLUMN similarity_hits INTEGER NOT NULL DEFAULT 0;
+      )sql",
   };
   return kMigrations;
 }

@@ -8,7 +8,7 @@ namespace {
 
 constexpr char kColumns[] =
     "id, name, tier, state, fraction_done, tasks_done, tasks_total, cache_hits, message, request, "
-    "summary_json, products, created_unix_ms, finished_unix_ms";
+    "summary_json, products, created_unix_ms, finished_unix_ms, similarity_hits";
 
 std::string JoinProducts(const std::vector<std::string>& products) {
   std::string out;
@@ -35,6 +35,7 @@ JobRecord ReadRow(const Statement& s) {
   }
   j.created_unix_ms = s.Int(12);
   j.finished_unix_ms = s.Int(13);
+  j.similarity_hits = s.Int(14);
   return j;
 }
 
@@ -105,9 +106,9 @@ void JobStore::SetProgress(const std::string& id, const JobProgress& p) {
   WriteTransaction tx(db_);
   Statement s = db_.Prepare(
       "UPDATE jobs SET fraction_done = ?, tasks_done = ?, tasks_total = ?, cache_hits = ?, "
-      "message = ? WHERE id = ?");
+      "message = ?, similarity_hits = ? WHERE id = ?");
   s.Bind(1, p.fraction_done).Bind(2, p.tasks_done).Bind(3, p.tasks_total).Bind(4, p.cache_hits);
-  s.Bind(5, p.message).Bind(6, id);
+  s.Bind(5, p.message).Bind(6, p.similarity_hits).Bind(7, id);
   s.Run();
   tx.Commit();
 }

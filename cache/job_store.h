@@ -26,6 +26,7 @@ struct JobRecord {
   int64_t tasks_done = 0;
   int64_t tasks_total = 0;
   int64_t cache_hits = 0;
+  int64_t similarity_hits = 0;
   std::string message;
   std::string request;       // serialised request, opaque to the store
   std::string summary_json;  // set when DONE
@@ -39,6 +40,7 @@ struct JobProgress {
   int64_t tasks_done = 0;
   int64_t tasks_total = 0;
   int64_t cache_hits = 0;
+  int64_t similarity_hits = 0;
   std::string message;
 };
 

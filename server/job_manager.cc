@@ -8,6 +8,7 @@
 
 #include "cache/curve_key.h"
 #include "server/convert.h"
+#include "server/curve_lookup.h"
 #include "server/geo/products.h"
 #include "server/map_plan.h"
 #include "server/summary.h"
@@ -46,6 +47,7 @@ v1::JobStatus StatusOf(const cache::JobRecord& j) {
   s.set_tasks_done(static_cast<uint32_t>(j.tasks_done));
   s.set_tasks_total(static_cast<uint32_t>(j.tasks_total));
   s.set_cache_hits(static_cast<uint32_t>(j.cache_hits));
+  s.set_similarity_hits(static_cast<uint32_t>(j.similarity_hits));
   s.set_message(j.message);
   return s;
 }
@@ -332,7 +334,7 @@ void JobManager::RunJob(const std::string& id) {
     Publish(id, status);
     if (persist) {
       jobs_.SetProgress(id, {status.fraction_done(), status.tasks_done(), status.tasks_total(),
-                             status.cache_hits(), message});
+                             status.cache_hits(), status.similarity_hits(), message});
     }
   };
   auto finish = [&](cache::JobState state, const std::string& message, const std::string& summary,
@@ -360,21 +362,31 @@ void JobManager::RunJob(const std::string& id) {
     const size_t total = plan.tasks.size();
     std::vector<TractionCurve> curves(total);
     std::vector<bool> resolved(total, false);
-    size_t done = 0, hits = 0;
+    size_t done = 0, hits = 0, similar = 0;
+    double smallest_ratio = 1;
     for (size_t i = 0; i < total; ++i) {
-      if (auto found = curves_.Find(plan.task_keys[i])) {
-        curves[i] = found->curve;
-        resolved[i] = true;
-        ++done;
+      auto found = LookUpCurve(curves_, tier, plan.tasks[i], plan.task_keys[i],
+                               !request.disable_similarity());
+      if (!found) continue;
+      curves[i] = std::move(found->curve);
+      resolved[i] = true;
+      ++done;
+      if (found->similarity) {
+        ++similar;
+        smallest_ratio = std::min(
+            {smallest_ratio, found->scale_ratio, 1.0 / found->scale_ratio});
+      } else {
         ++hits;
       }
     }
     status.set_tasks_total(static_cast<uint32_t>(total));
     status.set_tasks_done(static_cast<uint32_t>(done));
     status.set_cache_hits(static_cast<uint32_t>(hits));
+    status.set_similarity_hits(static_cast<uint32_t>(similar));
     status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
     report(std::to_string(plan.units.size()) + " terrain units, " + std::to_string(total) +
-               " traction tasks, " + std::to_string(hits) + " from the cache",
+               " traction tasks, " + std::to_string(hits) + " from the cache, " +
+               std::to_string(similar) + " from similar tyres",
            true);
 
     // Dispatch the misses.
@@ -460,7 +472,8 @@ void JobManager::RunJob(const std::string& id) {
     const fs::path out_dir = fs::path(JobDir(id)) / "out";
     fs::create_directories(out_dir);
     SummaryInputs si{id, request, tier.Name(), tier.Version(), pool_.Describe(), plan, *terrain,
-                     verdicts, total, total - hits, hits, computed_by, vci_pa, criteria,
+                     verdicts, total, total - hits - similar, hits, similar, smallest_ratio,
+                     computed_by, vci_pa, criteria,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};
     const std::string summary = BuildSummaryJson(si);
     geo::WriteMapProducts(terrain->grid, verdicts.go_class, verdicts.speed_kmh,

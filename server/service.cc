@@ -7,6 +7,7 @@
 
 #include "cache/curve_key.h"
 #include "server/convert.h"
+#include "server/curve_lookup.h"
 #include "solvers/common/errors.h"
 
 namespace gonogo::server {
@@ -27,19 +28,42 @@ const char* RoleFileName(v1::RasterRole role) {
   }
 }
 
-void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
-  *out->mutable_tyre() = ToProto(s.request.tyre);
-  out->set_wheel_load_n(s.request.wheel_load_n);
-  *out->mutable_soil() = ToProto(s.request.soil);
-  for (const TractionPoint& p : s.curve.points) *out->add_points() = ToProto(p);
+// `request` and `curve` are what is answered; `source` the stored curve behind it (the same one,
+// except for a similarity hit).
+void FillCurve(const TractionRequest& request, const TractionCurve& curve,
+               const cache::StoredCurve& source, bool hit, v1::TractionCurve* out) {
+  *out->mutable_tyre() = ToProto(request.tyre);
+  out->set_wheel_load_n(request.wheel_load_n);
+  *out->mutable_soil() = ToProto(request.soil);
+  for (const TractionPoint& p : curve.points) *out->add_points() = ToProto(p);
   v1::Provenance* prov = out->mutable_provenance();
-  prov->set_tier(s.curve.tier);
-  prov->set_tier_version(s.curve.tier_version);
-  prov->set_cache_key(s.cache_key);
+  prov->set_tier(source.curve.tier);
+  prov->set_tier_version(source.curve.tier_version);
+  prov->set_cache_key(source.cache_key);
   prov->set_cache_hit(hit);
-  prov->set_computed_by(s.computed_by);
-  prov->set_compute_seconds(s.compute_seconds);
-  prov->set_computed_unix_ms(s.computed_unix_ms);
+  prov->set_computed_by(source.computed_by);
+  prov->set_compute_seconds(source.compute_seconds);
+  prov->set_computed_unix_ms(source.computed_unix_ms);
+}
+
+void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
+  FillCurve(s.request, s.curve, s, hit, out);
+}
+
+void FillAnswer(const TractionRequest& request, const CachedAnswer& a, v1::TractionCurve* out) {
+  FillCurve(request, a.curve, a.source, true, out);
+  if (!a.similarity) return;
+  v1::Provenance* prov = out->mutable_provenance();
+  prov->set_similarity_hit(true);
+  prov->set_similarity_scale_ratio(a.scale_ratio);
+  if (a.reliability) {
+    v1::SimilarityReliability* r = prov->mutable_reliability();
+    r->set_reference_soil(a.reliability->soil);
+    r->set_reference_scale(a.reliability->scale);
+    r->set_drawbar_pull_pct(a.reliability->drawbar_pull_pct);
+    r->set_gross_traction_pct(a.reliability->gross_traction_pct);
+    r->set_efficiency_pct(a.reliability->efficiency_pct);
+  }
 }
 
 int64_t NowMs() {
@@ -247,8 +271,8 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     tier.ValidateSoil(r.soil, "soil");
     const TractionRequest q = cache::Quantise(r);
     const std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
-    if (auto found = curves_.Find(key)) {
-      FillCurve(*found, true, response);
+    if (auto found = LookUpCurve(curves_, tier, q, key, !request->disable_similarity())) {
+      FillAnswer(q, *found, response);
       return grpc::Status::OK;
     }
     // Not cached: the pool computes it; this handler waits on the answer, not on the solver.

@@ -21,6 +21,8 @@ struct SummaryInputs {
   size_t tasks_total;
   size_t tasks_computed;
   size_t cache_hits;
+  size_t similarity_hits;
+  double smallest_scale_ratio;                 // of the similarity hits (1 when none)
   std::map<std::string, int64_t> computed_by;  // "rank 1" -> tasks
   double soft_soil_vci_pa;                     // 0: no soft-soil test
   mobility::Criteria criteria;

@@ -50,7 +50,7 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 2);
+  EXPECT_EQ(db.SchemaVersion(), 3);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
@@ -81,7 +81,7 @@ TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
   sqlite3_close(raw);
 
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 2);
+  EXPECT_EQ(db.SchemaVersion(), 3);
   CurveStore store(db);
   auto old = store.Find("old-key");
   ASSERT_TRUE(old.has_value());
@@ -107,6 +107,38 @@ TEST_F(StoreTest, BekkerParametersRoundTrip) {
   EXPECT_DOUBLE_EQ(back->request.tyre.inflation_pressure_pa, 200000);
   EXPECT_EQ(CurveKey("bekker", "bekker-1", Quantise(back->request)), c.cache_key)
       << "a stored curve's request gives back its own key";
+}
+
+TEST_F(StoreTest, FindSimilarNeedsTheSameGroupMatchingPiTermsAndAnAllowedScale) {
+  Database db(path_);
+  CurveStore store(db);
+  StoredCurve full = Curve(149000, 1);  // d 1.011 m, W 14513 N
+  ASSERT_TRUE(store.Put(full));
+  auto scaled = [&](double k, double load_factor) {
+    TractionRequest r = full.request;
+    r.tyre.diameter_m *= k;
+    r.tyre.width_m *= k;
+    r.tyre.section_height_m *= k;
+    r.tyre.deflection_m *= k;
+    r.tyre.rolling_radius_m *= k;
+    r.wheel_load_n *= k * k * load_factor;
+    return Quantise(r);
+  };
+  const std::string group = SimilarityGroup("empirical", "empirical-1", full.request);
+  auto hit = store.FindSimilar(group, scaled(0.7, 1.0), 0.01, 0.5);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_EQ(hit->cache_key, full.cache_key);
+  EXPECT_FALSE(store.FindSimilar(group, scaled(0.7, 1.05), 0.01, 0.5)) << "5 % more pressure";
+  EXPECT_FALSE(store.FindSimilar(group, scaled(0.4, 1.0), 0.01, 0.5)) << "scale below the limit";
+  EXPECT_FALSE(store.FindSimilar(SimilarityGroup("empirical", "empirical-2", full.request),
+                                 scaled(0.7, 1.0), 0.01, 0.5))
+      << "another tier version is another group";
+  TractionRequest other_soil = scaled(0.7, 1.0);
+  other_soil.soil.cone_index_pa = 300000;
+  other_soil = Quantise(other_soil);
+  EXPECT_FALSE(store.FindSimilar(SimilarityGroup("empirical", "empirical-1", other_soil),
+                                 other_soil, 0.01, 0.5))
+      << "another soil";
 }
 
 TEST_F(StoreTest, RefusesADatabaseNewerThanTheCode) {
@@ -177,7 +209,7 @@ TEST_F(StoreTest, JobsPersistTheirStateAndUnfinishedOnesAreFound) {
       jobs.Create(j);
     }
     jobs.SetState("job-1", JobState::kRunning, "computing");
-    jobs.SetProgress("job-1", {0.5, 10, 20, 4, "computing 10/20"});
+    jobs.SetProgress("job-1", {0.5, 10, 20, 4, 3, "computing 10/20"});
     jobs.Finish("job-2", JobState::kDone, "done", "{}", {"gonogo.tif", "summary.json"}, 5000);
   }
   Database db(path_);
@@ -187,6 +219,7 @@ TEST_F(StoreTest, JobsPersistTheirStateAndUnfinishedOnesAreFound) {
   EXPECT_EQ(j1->state, JobState::kRunning);
   EXPECT_EQ(j1->tasks_done, 10);
   EXPECT_EQ(j1->cache_hits, 4);
+  EXPECT_EQ(j1->similarity_hits, 3);
   EXPECT_EQ(j1->request, std::string("\x01\x00\x02", 3)) << "binary requests survive";
   auto unfinished = jobs.Unfinished();
   ASSERT_EQ(unfinished.size(), 2u);

@@ -123,7 +123,8 @@ TEST_F(ServiceTest, SampleMapProducesGeoreferencedProductsAndASecondRunComputesN
   const json first = RunSample(&first_id);
   const int64_t total = first["tasks"]["total"];
   EXPECT_GT(total, 0);
-  EXPECT_EQ(first["tasks"]["computed"].get<int64_t>() + first["tasks"]["cache_hits"].get<int64_t>(),
+  EXPECT_EQ(first["tasks"]["computed"].get<int64_t>() + first["tasks"]["cache_hits"].get<int64_t>() +
+                first["tasks"]["similarity_hits"].get<int64_t>(),
             total);
   EXPECT_EQ(first["provenance"]["tier"], "empirical");
   EXPECT_EQ(first["provenance"]["vehicle_name"], "FED Alpha");
@@ -413,6 +414,58 @@ TEST_F(ServiceTest, TractionCurveIsComputedOnceThenServedFromTheCache) {
   } while (!token.empty());
   EXPECT_EQ(static_cast<int64_t>(keys.size()), CurveCount());
   EXPECT_GE(pages, 1);
+}
+
+TEST_F(ServiceTest, SimilarTyreIsAnsweredFromTheCacheUnlessDisabled) {
+  auto stub = server_->Stub();
+  // Seed 001 Tables 4 and 6: the FED Alpha tyre and its scale models, loads by equal W/(b d),
+  // on a soil no other test here uses (cone index 149 kPa, the 2NS sand).
+  auto request = [](double k, bool disable) {
+    v1::GetTractionCurveRequest req;
+    req.set_tier("empirical");
+    v1::Tyre* t = req.mutable_tyre();
+    t->set_diameter_m(1.011 * k);
+    t->set_width_m(0.335 * k);
+    t->set_section_height_m(0.2178 * k);
+    t->set_deflection_m(0.0327 * k);
+    req.set_wheel_load_n(13438 * k * k);
+    req.mutable_soil()->set_cone_index_pa(149e3);
+    req.set_disable_similarity(disable);
+    return req;
+  };
+  auto get = [&](const v1::GetTractionCurveRequest& req) {
+    grpc::ClientContext ctx;
+    v1::TractionCurve c;
+    const grpc::Status s = stub->GetTractionCurve(&ctx, req, &c);
+    EXPECT_TRUE(s.ok()) << s.error_message();
+    return c;
+  };
+  const v1::TractionCurve full = get(request(1.0, false));
+  EXPECT_FALSE(full.provenance().cache_hit());
+  const v1::TractionCurve similar = get(request(0.7, false));
+  EXPECT_TRUE(similar.provenance().cache_hit());
+  EXPECT_TRUE(similar.provenance().similarity_hit());
+  EXPECT_NEAR(similar.provenance().similarity_scale_ratio(), 0.7, 1e-3);
+  EXPECT_EQ(similar.provenance().cache_key(), full.provenance().cache_key()) << "names the source";
+  EXPECT_EQ(similar.provenance().reliability().reference_soil(), "2NS");
+  EXPECT_DOUBLE_EQ(similar.provenance().reliability().gross_traction_pct(), 97.1);
+  EXPECT_NEAR(similar.tyre().diameter_m(), 0.7077, 1e-4) << "answered for the requested tyre";
+
+  // The same tyre with similarity off is computed, and for this tier it must agree (the empirical
+  // tier depends on the pi-terms only; the residue is the key's quantisation of lengths and load).
+  const v1::TractionCurve direct = get(request(0.7, true));
+  EXPECT_FALSE(direct.provenance().cache_hit());
+  EXPECT_FALSE(direct.provenance().similarity_hit());
+  ASSERT_EQ(direct.points_size(), similar.points_size());
+  for (int i = 0; i < direct.points_size(); ++i) {
+    EXPECT_NEAR(similar.points(i).drawbar_pull_n(), direct.points(i).drawbar_pull_n(),
+                2e-3 * 13438 * 0.49)
+        << "slip " << direct.points(i).slip();
+    EXPECT_NEAR(similar.points(i).tractive_efficiency(), direct.points(i).tractive_efficiency(),
+                2e-3);
+  }
+  // A quarter-scale tyre is below the smallest ratio served from similarity (0.5).
+  EXPECT_FALSE(get(request(0.25, false)).provenance().similarity_hit());
 }
 
 }  // namespace

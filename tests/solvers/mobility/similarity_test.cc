@@ -1,0 +1,106 @@
+#include "solvers/mobility/similarity.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "solvers/terramech/empirical_tier.h"
+
+namespace gonogo::mobility {
+namespace {
+
+// Seed 001 Table 4: the FED Alpha tyre (scale 1) with its load of Table 6.
+TractionRequest FullScale() {
+  TractionRequest r;
+  r.soil.cone_index_pa = 149e3;  // 2NS sand
+  r.tyre = TyreGeometry{1.011, 0.335, 0.2178, 0.0327, 0.4728};
+  r.wheel_load_n = 13438;
+  r.slips = TractionRequest::SlipSweep(0.05);
+  return r;
+}
+
+// Lengths scaled by k, load by k^2: equal W/(b d) (seed 001 Table 6).
+TractionRequest Scaled(double k) {
+  TractionRequest r = FullScale();
+  r.tyre.diameter_m *= k;
+  r.tyre.width_m *= k;
+  r.tyre.section_height_m *= k;
+  r.tyre.deflection_m *= k;
+  r.tyre.rolling_radius_m *= k;
+  r.wheel_load_n *= k * k;
+  return r;
+}
+
+TEST(PiTerms, SeedScaledTyresShareTheirPiTerms) {
+  const PiTerms full = ComputePiTerms(FullScale());
+  EXPECT_NEAR(full.width_over_diameter, 0.3314, 1e-4);
+  EXPECT_NEAR(full.load_over_bd_pa, 13438 / (0.335 * 1.011), 1e-6);
+  for (double k : {0.7, 0.5, 0.25}) EXPECT_TRUE(PiTermsMatch(full, ComputePiTerms(Scaled(k))));
+  TractionRequest heavier = Scaled(0.7);
+  heavier.wheel_load_n *= 1.02;
+  EXPECT_FALSE(PiTermsMatch(full, ComputePiTerms(heavier))) << "2 % more pressure";
+  TractionRequest wider = Scaled(0.7);
+  wider.tyre.width_m *= 1.05;
+  wider.wheel_load_n *= 1.05;  // same W/(b d), other b/d
+  EXPECT_FALSE(PiTermsMatch(full, ComputePiTerms(wider)));
+}
+
+TEST(Dimensionless, RoundTripIsExact) {
+  terramech::EmpiricalTier tier;
+  const TractionRequest r = FullScale();
+  const TractionCurve c = tier.Compute(r);
+  const TractionCurve back = FromDimensionless(r, ToDimensionless(r, c));
+  ASSERT_EQ(back.points.size(), c.points.size());
+  for (size_t i = 0; i < c.points.size(); ++i) {
+    EXPECT_NEAR(back.points[i].drawbar_pull_n, c.points[i].drawbar_pull_n, 1e-9);
+    EXPECT_NEAR(back.points[i].torque_nm, c.points[i].torque_nm, 1e-9);
+    EXPECT_NEAR(back.points[i].sinkage_m, c.points[i].sinkage_m, 1e-12);
+    EXPECT_NEAR(back.points[i].gross_traction_n, c.points[i].gross_traction_n, 1e-9);
+  }
+}
+
+// The empirical tier depends on the pi-terms only, so a similarity answer must equal the curve
+// computed directly for the scaled tyre: the closed-form check of the scaling law.
+TEST(Dimensionless, ScaledEmpiricalCurveEqualsTheDirectComputation) {
+  terramech::EmpiricalTier tier;
+  const TractionRequest full = FullScale();
+  const auto dimensionless = ToDimensionless(full, tier.Compute(full));
+  for (double k : {0.7, 0.5, 0.25}) {
+    const TractionRequest small = Scaled(k);
+    const TractionCurve direct = tier.Compute(small);
+    const TractionCurve scaled = FromDimensionless(small, dimensionless);
+    for (size_t i = 0; i < direct.points.size(); ++i) {
+      const auto& a = direct.points[i];
+      const auto& b = scaled.points[i];
+      EXPECT_NEAR(b.drawbar_pull_n, a.drawbar_pull_n, 1e-9 * small.wheel_load_n) << k;
+      EXPECT_NEAR(b.torque_nm, a.torque_nm, 1e-9 * small.wheel_load_n) << k;
+      EXPECT_NEAR(b.sinkage_m, a.sinkage_m, 1e-12) << k;
+      EXPECT_NEAR(b.tractive_efficiency, a.tractive_efficiency, 1e-12) << k;
+    }
+  }
+}
+
+TEST(ScalabilityTable, Seed001FiguresByScaleAndSoil) {
+  const ScalabilityTable& t = ScalabilityTable::Seed001();
+  ASSERT_EQ(t.records().size(), 6u);
+  auto r = t.For(0.7, 149e3);  // 2NS, scale 0.7: Table 7
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->soil, "2NS");
+  EXPECT_DOUBLE_EQ(r->gross_traction_pct, 97.1);
+  r = t.For(0.6, 22e3);  // between the tabulated scales: the smaller (0.5), FGS: Table 8
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->soil, "FGS");
+  EXPECT_DOUBLE_EQ(r->scale, 0.5);
+  EXPECT_DOUBLE_EQ(r->drawbar_pull_pct, 70.7);
+  r = t.For(0.95, 300e3);  // above 0.7: the 0.7 row; 300 kPa is nearer 2NS
+  EXPECT_EQ(r->soil, "2NS");
+  EXPECT_DOUBLE_EQ(r->scale, 0.7);
+  r = t.For(0.5, 0);  // no cone index: the lower of both soils
+  EXPECT_DOUBLE_EQ(r->drawbar_pull_pct, 70.7);
+  EXPECT_DOUBLE_EQ(r->gross_traction_pct, 41.4);
+  EXPECT_DOUBLE_EQ(r->efficiency_pct, 56.1);
+  EXPECT_FALSE(t.For(0.2, 149e3).has_value()) << "below every tabulated scale";
+}
+
+}  // namespace
+}  // namespace gonogo::mobility
