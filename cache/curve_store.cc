@@ -49,7 +49,7 @@ std::optional<BekkerParameters> ParseBekkerText(const std::string& text) {
 constexpr char kColumns[] =
     "id, cache_key, tier, tier_version, soil_name, cone_index_pa, diameter_m, width_m, "
     "section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, computed_by, "
-    "compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa";
+    "compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa, immobile_reason";
 
 StoredCurve ReadRow(const Statement& s) {
   StoredCurve c;
@@ -67,6 +67,7 @@ StoredCurve ReadRow(const Statement& s) {
   c.computed_unix_ms = s.Int(15);
   c.request.soil.bekker = ParseBekkerText(s.Text(16));
   c.request.tyre.inflation_pressure_pa = s.Double(17);
+  c.curve.immobile_reason = s.Text(18);
   return c;
 }
 
@@ -86,8 +87,8 @@ bool CurveStore::Put(const StoredCurve& c) {
       "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
       "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
       "computed_by, compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa, "
-      "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa) "
-      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+      "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa, immobile_reason) "
+      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const std::string blob = PackPoints(c.curve.points);
   s.Bind(1, c.cache_key).Bind(2, c.curve.tier).Bind(3, c.curve.tier_version);
   s.Bind(4, c.request.soil.soil_name).Bind(5, c.request.soil.cone_index_pa);
@@ -100,7 +101,7 @@ bool CurveStore::Put(const StoredCurve& c) {
   const mobility::PiTerms pi = mobility::ComputePiTerms(c.request);
   s.Bind(18, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request));
   s.Bind(19, pi.width_over_diameter).Bind(20, pi.deflection_over_height);
-  s.Bind(21, pi.load_over_bd_pa);
+  s.Bind(21, pi.load_over_bd_pa).Bind(22, c.curve.immobile_reason);
   s.Run();
   const bool written = db_.Changes() > 0;
   tx.Commit();
@@ -120,7 +121,7 @@ std::optional<StoredCurve> CurveStore::FindSimilar(const std::string& group,
   std::optional<StoredCurve> best;
   double best_ratio = 0;
   while (s.Step()) {
-    const mobility::PiTerms have{s.Double(18), s.Double(19), s.Double(20)};
+    const mobility::PiTerms have{s.Double(19), s.Double(20), s.Double(21)};
     if (!mobility::PiTermsMatch(want, have, tolerance)) continue;
     const double d = s.Double(6);
     const double ratio = std::min(d, q.tyre.diameter_m) / std::max(d, q.tyre.diameter_m);

@@ -62,6 +62,7 @@ const std::vector<std::string>& Migrations() {
       ALTER TABLE curves ADD COLUMN pi_delta_over_h REAL NOT NULL DEFAULT 0;
       ALTER TABLE curves ADD COLUMN pi_load_over_bd_pa REAL NOT NULL DEFAULT 0;
       CREATE INDEX curves_by_similarity ON curves (similarity_group, pi_load_over_bd_pa);
+      ALTER TABLE curves ADD COLUMN immobile_reason TEXT NOT NULL DEFAULT '';
       ALTER TABLE jobs ADD COLUMN similarity_hits INTEGER NOT NULL DEFAULT 0;
       )sql",
   };

@@ -44,8 +44,11 @@ const char* kUsage =
     "            [--section-height M --deflection M] --wheel-load N [--rolling-radius M]\n"
     "            [--inflation-pressure-kpa P]) (--cone-index KPA | --soil NAME |\n"
     "            --bekker n=N,kc=KC,kphi=KPHI,c=C,phi_deg=PHI,K=K) [--slip-step S] [--csv]\n"
+    "            [--no-similarity]\n"
     "            Bekker parameters in SI: kc N/m^(n+1), kphi N/m^(n+2), c Pa, phi degrees, K m;\n"
     "            without --section-height the wheel is rigid (h = d/4 is sent, deflection 0)\n"
+    "  scalability --tier T (wheel and soil options as for curve) [--scales 1,0.7,0.5,0.25]\n"
+    "            [--slip-step S] --out DIR   seed 001's scaled-tyre study: loads by equal W/(b d)\n"
     "The server defaults to $GONOGO_SERVER, else 127.0.0.1:50051.\n";
 
 class UsageError : public std::runtime_error {
@@ -152,7 +155,8 @@ class ProgressBar {
     const int filled = percent * 30 / 100;
     line << "[" << std::string(filled, '#') << std::string(30 - filled, '-') << "] "
          << std::setw(3) << percent << "%  tasks " << s.tasks_done() << "/" << s.tasks_total()
-         << "  cache hits " << s.cache_hits() << "  " << StateName(s.state()) << ": "
+         << "  cache hits " << s.cache_hits() << "  similar " << s.similarity_hits() << "  "
+         << StateName(s.state()) << ": "
          << s.message();
     if (tty_) {
       std::cerr << "\r\033[K" << line.str() << std::flush;
@@ -230,6 +234,7 @@ int Map(Client& client, const Args& a) {
   v1::MapRequest request;
   request.set_name(a.Get("name", "map " + fs::path(a.Need("cone-index")).stem().string()));
   request.set_tier(a.Need("tier"));
+  request.set_disable_similarity(a.Has("no-similarity"));
   *request.mutable_vehicle() = ReadJson<v1::Vehicle>(a.Need("vehicle"), "vehicle file");
   if (a.Has("soil-table")) {
     *request.mutable_soil_table() = ReadJson<v1::SoilTable>(a.Get("soil-table"), "soil table");
@@ -373,16 +378,20 @@ v1::BekkerParameters ParseBekker(const std::string& text) {
   return p;
 }
 
-int Curve(Client& client, const Args& a) {
-  v1::GetTractionCurveRequest req;
-  req.set_tier(a.Need("tier"));
+// The soil options shared by `curve` and `scalability`.
+v1::SoilState SoilFromArgs(const Args& a) {
   if (!a.Has("cone-index") && !a.Has("soil") && !a.Has("bekker")) {
     throw UsageError("give the soil: --cone-index KPA, --soil NAME or --bekker ...");
   }
-  if (a.Has("cone-index")) req.mutable_soil()->set_cone_index_pa(a.Number("cone-index", 0) * 1000.0);
-  req.mutable_soil()->set_soil_name(a.Get("soil"));
-  if (a.Has("bekker")) *req.mutable_soil()->mutable_bekker() = ParseBekker(a.Get("bekker"));
-  req.set_slip_step(a.Number("slip-step", 0));
+  v1::SoilState soil;
+  if (a.Has("cone-index")) soil.set_cone_index_pa(a.Number("cone-index", 0) * 1000.0);
+  soil.set_soil_name(a.Get("soil"));
+  if (a.Has("bekker")) *soil.mutable_bekker() = ParseBekker(a.Get("bekker"));
+  return soil;
+}
+
+// The wheel options shared by `curve` and `scalability`: a vehicle's axle, or the wheel itself.
+void WheelFromArgs(const Args& a, v1::Tyre* tyre, double* wheel_load_n) {
   if (a.Has("vehicle")) {
     const auto vehicle = ReadJson<v1::Vehicle>(a.Get("vehicle"), "vehicle file");
     const int axle = static_cast<int>(a.Number("axle", 1)) - 1;
@@ -395,23 +404,33 @@ int Curve(Client& client, const Args& a) {
       const double rear = vehicle.cg_behind_front_axle_m() / vehicle.wheelbase_m();
       fraction = axle == 0 ? 1 - rear : rear;
     }
-    *req.mutable_tyre() = ax.tyre();
-    req.set_wheel_load_n(vehicle.mass_kg() * 9.80665 * fraction / std::max(1u, ax.wheels()));
-  } else {
-    v1::Tyre* t = req.mutable_tyre();
-    t->set_diameter_m(a.Number("wheel-diameter", NAN));
-    t->set_width_m(a.Number("wheel-width", NAN));
-    // A rigid wheel has no section height: a quarter of the diameter stands in (it only enters
-    // the empirical tier's deflection ratio, which is 0 for a rigid wheel).
-    t->set_section_height_m(a.Number("section-height", 0.25 * t->diameter_m()));
-    t->set_deflection_m(a.Number("deflection", 0));
-    t->set_rolling_radius_m(a.Number("rolling-radius", 0));
-    t->set_inflation_pressure_pa(a.Number("inflation-pressure-kpa", 0) * 1000.0);
-    for (const char* k : {"wheel-diameter", "wheel-width", "wheel-load"}) {
-      if (!a.Has(k)) throw UsageError(std::string("--") + k + " is required without --vehicle");
-    }
-    req.set_wheel_load_n(a.Number("wheel-load", NAN));
+    *tyre = ax.tyre();
+    *wheel_load_n = vehicle.mass_kg() * 9.80665 * fraction / std::max(1u, ax.wheels());
+    return;
   }
+  for (const char* k : {"wheel-diameter", "wheel-width", "wheel-load"}) {
+    if (!a.Has(k)) throw UsageError(std::string("--") + k + " is required without --vehicle");
+  }
+  tyre->set_diameter_m(a.Number("wheel-diameter", NAN));
+  tyre->set_width_m(a.Number("wheel-width", NAN));
+  // A rigid wheel has no section height: a quarter of the diameter stands in (it only enters
+  // the empirical tier's deflection ratio, which is 0 for a rigid wheel).
+  tyre->set_section_height_m(a.Number("section-height", 0.25 * tyre->diameter_m()));
+  tyre->set_deflection_m(a.Number("deflection", 0));
+  tyre->set_rolling_radius_m(a.Number("rolling-radius", 0));
+  tyre->set_inflation_pressure_pa(a.Number("inflation-pressure-kpa", 0) * 1000.0);
+  *wheel_load_n = a.Number("wheel-load", NAN);
+}
+
+int Curve(Client& client, const Args& a) {
+  v1::GetTractionCurveRequest req;
+  req.set_tier(a.Need("tier"));
+  *req.mutable_soil() = SoilFromArgs(a);
+  req.set_slip_step(a.Number("slip-step", 0));
+  req.set_disable_similarity(a.Has("no-similarity"));
+  double load = 0;
+  WheelFromArgs(a, req.mutable_tyre(), &load);
+  req.set_wheel_load_n(load);
   grpc::ClientContext ctx;
   v1::TractionCurve curve;
   const grpc::Status s = client.stub().GetTractionCurve(&ctx, req, &curve);
@@ -430,9 +449,19 @@ int Curve(Client& client, const Args& a) {
               << curve.wheel_load_n() << " N, ";
     if (!curve.soil().soil_name().empty()) std::cout << "soil " << curve.soil().soil_name() << ", ";
     if (curve.soil().has_bekker()) std::cout << "explicit Bekker parameters, ";
-    std::cout << "cone index " << curve.soil().cone_index_pa() / 1000 << " kPa, "
-              << (p.cache_hit() ? "from the cache" : "computed") << " by " << p.computed_by()
+    if (curve.soil().cone_index_pa() > 0) {
+      std::cout << "cone index " << curve.soil().cone_index_pa() / 1000 << " kPa, ";
+    }
+    std::cout << (p.cache_hit() ? "from the cache" : "computed") << " by " << p.computed_by()
               << "\n";
+    if (p.similarity_hit()) {
+      const auto& r = p.reliability();
+      std::cout << "similarity hit: scaled from a tyre " << 1 / p.similarity_scale_ratio()
+                << " times this size; seed 001 measured at scale " << r.reference_scale()
+                << " on " << r.reference_soil() << ": " << r.drawbar_pull_pct() << " % (D/W), "
+                << r.gross_traction_pct() << " % (T/rW), " << r.efficiency_pct()
+                << " % (efficiency) of points inside the full-scale band\n";
+    }
     std::cout << std::right << std::setw(6) << "slip" << std::setw(14) << "drawbar_N"
               << std::setw(14) << "torque_Nm" << std::setw(12) << "sinkage_m" << std::setw(12)
               << "efficiency" << "\n";
@@ -443,7 +472,76 @@ int Curve(Client& client, const Args& a) {
                 << std::setprecision(3) << std::setw(12) << pt.tractive_efficiency() << "\n";
     }
   }
-  std::cerr << "cache key: " << p.cache_key() << "\n";
+  std::cerr << (p.similarity_hit() ? "source cache key: " : "cache key: ") << p.cache_key()
+            << "\n";
+  return 0;
+}
+
+int Scalability(Client& client, const Args& a) {
+  v1::ScalabilityRequest req;
+  req.set_tier(a.Need("tier"));
+  *req.mutable_soil() = SoilFromArgs(a);
+  double load = 0;
+  WheelFromArgs(a, req.mutable_tyre(), &load);
+  req.set_wheel_load_n(load);
+  req.set_slip_step(a.Number("slip-step", 0));
+  std::istringstream scales(a.Get("scales", "1,0.7,0.5,0.25"));
+  for (std::string item; std::getline(scales, item, ',');) {
+    try {
+      req.add_scales(std::stod(item));
+    } catch (const std::logic_error&) {
+      throw UsageError("--scales needs numbers separated by commas, got '" + item + "'");
+    }
+  }
+  const fs::path out = a.Need("out");
+  grpc::ClientContext ctx;
+  v1::ScalabilityReport report;
+  const grpc::Status s = client.stub().RunScalability(&ctx, req, &report);
+  if (!s.ok()) return Fail(s);
+  fs::create_directories(out);
+  std::ofstream(out / "scalability.png", std::ios::binary) << report.plot_png();
+  std::ofstream curves(out / "scalability_curves.csv");
+  curves << "scale,slip,drawbar_pull_coefficient,gross_traction_coefficient,tractive_efficiency,"
+            "drawbar_pull_n,torque_nm,sinkage_m,wheel_load_n,rolling_radius_m\n";
+  std::ofstream summary(out / "scalability_summary.csv");
+  summary << "scale,diameter_m,width_m,wheel_load_n,drawbar_pull_inside_pct,"
+             "gross_traction_inside_pct,efficiency_inside_pct,seed_soil,seed_scale,"
+             "seed_drawbar_pull_pct,seed_gross_traction_pct,seed_efficiency_pct\n";
+  std::cout << "band (one SD of the full-scale coefficient): D/W " << report.band_drawbar_pull()
+            << ", T/(rW) " << report.band_gross_traction() << ", efficiency "
+            << report.band_efficiency() << "\n";
+  std::cout << std::left << std::setw(7) << "scale" << std::setw(10) << "d_m" << std::setw(11)
+            << "W_N" << std::setw(22) << "inside: D/W  T/rW  eff" << "  seed 001 measured\n";
+  for (const auto& row : report.rows()) {
+    const double r = row.tyre().rolling_radius_m() > 0
+                         ? row.tyre().rolling_radius_m()
+                         : row.tyre().diameter_m() / 2 - row.tyre().deflection_m();
+    for (const auto& p : row.points()) {
+      curves << row.scale() << "," << p.slip() << "," << p.drawbar_pull_n() / row.wheel_load_n()
+             << "," << p.torque_nm() / (r * row.wheel_load_n()) << "," << p.tractive_efficiency()
+             << "," << p.drawbar_pull_n() << "," << p.torque_nm() << "," << p.sinkage_m() << ","
+             << row.wheel_load_n() << "," << r << "\n";
+    }
+    const auto& m = row.seed_measured();
+    summary << row.scale() << "," << row.tyre().diameter_m() << "," << row.tyre().width_m() << ","
+            << row.wheel_load_n() << "," << row.drawbar_pull_inside_pct() << ","
+            << row.gross_traction_inside_pct() << "," << row.efficiency_inside_pct() << ","
+            << m.reference_soil() << "," << m.reference_scale() << "," << m.drawbar_pull_pct()
+            << "," << m.gross_traction_pct() << "," << m.efficiency_pct() << "\n";
+    std::ostringstream inside, seed;
+    inside << std::fixed << std::setprecision(1) << row.drawbar_pull_inside_pct() << "  "
+           << row.gross_traction_inside_pct() << "  " << row.efficiency_inside_pct();
+    if (row.has_seed_measured()) {
+      seed << m.reference_soil() << " " << m.reference_scale() << ": " << m.drawbar_pull_pct()
+           << "  " << m.gross_traction_pct() << "  " << m.efficiency_pct();
+    }
+    std::cout << std::left << std::setw(7) << row.scale() << std::setw(10)
+              << row.tyre().diameter_m() << std::setw(11) << row.wheel_load_n() << std::setw(22)
+              << inside.str() << "  " << seed.str() << "\n";
+  }
+  std::cerr << "wrote " << (out / "scalability.png").string() << ", "
+            << (out / "scalability_curves.csv").string() << ", "
+            << (out / "scalability_summary.csv").string() << "\n";
   return 0;
 }
 
@@ -469,7 +567,7 @@ int main(int argc, char** argv) {
       server = endpoint;
     }
     const std::string command = args[0];
-    const Args a = ParseArgs({args.begin() + 1, args.end()}, {"csv", "no-wait"});
+    const Args a = ParseArgs({args.begin() + 1, args.end()}, {"csv", "no-wait", "no-similarity"});
     Client client(server);
     if (command == "map") return Map(client, a);
     if (command == "jobs") return Jobs(client, a);
@@ -477,6 +575,7 @@ int main(int argc, char** argv) {
     if (command == "cancel") return Cancel(client, a);
     if (command == "download") return Download(client, a);
     if (command == "curve") return Curve(client, a);
+    if (command == "scalability") return Scalability(client, a);
     throw UsageError("unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::cerr << "gonogo: " << e.what() << "\n" << kUsage;

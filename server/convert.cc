@@ -146,6 +146,7 @@ v1::WorkerResult ToWorkerResult(const TaskResult& r) {
   w.set_error(r.error);
   w.set_tier_version(r.curve.tier_version);
   w.set_compute_seconds(r.compute_seconds);
+  w.set_immobile_reason(r.curve.immobile_reason);
   for (const TractionPoint& p : r.curve.points) *w.add_points() = ToProto(p);
   return w;
 }
@@ -159,6 +160,7 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   r.error = w.error();
   r.curve.tier = tier;
   r.curve.tier_version = w.tier_version();
+  r.curve.immobile_reason = w.immobile_reason();
   for (const auto& p : w.points()) r.curve.points.push_back(FromProto(p));
   r.computed_by = computed_by;
   r.compute_seconds = w.compute_seconds();

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "cache/curve_key.h"
+#include "server/convert.h"
 
 namespace gonogo::server {
 
@@ -24,12 +25,51 @@ std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const Traction
       q, mobility::ToDimensionless(similar->request, similar->curve));
   a.curve.tier = similar->curve.tier;
   a.curve.tier_version = similar->curve.tier_version;
+  a.curve.immobile_reason = similar->curve.immobile_reason;
   a.similarity = true;
   a.scale_ratio = q.tyre.diameter_m / similar->request.tyre.diameter_m;
   const double ratio = std::min(a.scale_ratio, 1.0 / a.scale_ratio);
   a.reliability = mobility::ScalabilityTable::Seed001().For(ratio, q.soil.cone_index_pa);
   a.source = std::move(*similar);
   return a;
+}
+
+// `request` and `curve` are what is answered; `source` the stored curve behind it (the same one,
+// except for a similarity hit).
+void FillCurve(const TractionRequest& request, const TractionCurve& curve,
+               const cache::StoredCurve& source, bool hit, v1::TractionCurve* out) {
+  *out->mutable_tyre() = ToProto(request.tyre);
+  out->set_wheel_load_n(request.wheel_load_n);
+  *out->mutable_soil() = ToProto(request.soil);
+  for (const TractionPoint& p : curve.points) *out->add_points() = ToProto(p);
+  v1::Provenance* prov = out->mutable_provenance();
+  prov->set_tier(source.curve.tier);
+  prov->set_tier_version(source.curve.tier_version);
+  prov->set_cache_key(source.cache_key);
+  prov->set_cache_hit(hit);
+  prov->set_computed_by(source.computed_by);
+  prov->set_compute_seconds(source.compute_seconds);
+  prov->set_computed_unix_ms(source.computed_unix_ms);
+}
+
+void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
+  FillCurve(s.request, s.curve, s, hit, out);
+}
+
+void FillAnswer(const TractionRequest& request, const CachedAnswer& a, v1::TractionCurve* out) {
+  FillCurve(request, a.curve, a.source, true, out);
+  if (!a.similarity) return;
+  v1::Provenance* prov = out->mutable_provenance();
+  prov->set_similarity_hit(true);
+  prov->set_similarity_scale_ratio(a.scale_ratio);
+  if (a.reliability) {
+    v1::SimilarityReliability* r = prov->mutable_reliability();
+    r->set_reference_soil(a.reliability->soil);
+    r->set_reference_scale(a.reliability->scale);
+    r->set_drawbar_pull_pct(a.reliability->drawbar_pull_pct);
+    r->set_gross_traction_pct(a.reliability->gross_traction_pct);
+    r->set_efficiency_pct(a.reliability->efficiency_pct);
+  }
 }
 
 }  // namespace gonogo::server

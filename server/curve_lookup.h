@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cache/curve_store.h"
+#include "gonogo/v1/mobility.pb.h"
 #include "solvers/common/tier.h"
 #include "solvers/mobility/similarity.h"
 
@@ -22,5 +23,12 @@ struct CachedAnswer {
 std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const TractionTier& tier,
                                         const TractionRequest& quantised, const std::string& key,
                                         bool allow_similarity);
+
+// The API form of an answer. `request` and `curve` are what is answered; `source` the stored curve
+// behind it (the same one, except for a similarity hit).
+void FillCurve(const TractionRequest& request, const TractionCurve& curve,
+               const cache::StoredCurve& source, bool hit, v1::TractionCurve* out);
+void FillCurve(const cache::StoredCurve& stored, bool hit, v1::TractionCurve* out);
+void FillAnswer(const TractionRequest& request, const CachedAnswer& answer, v1::TractionCurve* out);
 
 }  // namespace gonogo::server

@@ -74,7 +74,8 @@ std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
     const double ri = c.remolding_index() == 0 ? 1.0 : c.remolding_index();
     Require(std::isfinite(ri) && ri > 0 && ri <= 2, field + ".remolding_index",
             "must lie in (0, 2]");
-    out[c.code()] = SoilClassInfo{c.name(), ri, BekkerFromProto(c.has_bekker(), c.bekker())};
+    const std::string library_name = c.bekker_soil().empty() ? c.name() : c.bekker_soil();
+    out[c.code()] = SoilClassInfo{library_name, ri, BekkerFromProto(c.has_bekker(), c.bekker())};
     if (out[c.code()].bekker) out[c.code()].bekker->Validate(field + ".bekker.");
   }
   return out;

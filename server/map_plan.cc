@@ -54,11 +54,8 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
   for (size_t u = 0; u < plan.units.size(); ++u) {
     for (size_t a = 0; a < vehicle.axles.size(); ++a) {
       TractionRequest r;
-      r.soil.cone_index_pa = plan.units[u].rating_cone_index_pa;
-      if (tier.UsesSoilName()) {
-        r.soil.soil_name = plan.units[u].soil_name;
-        r.soil.bekker = plan.units[u].bekker;
-      }
+      r.soil = SoilForTier(tier, SoilState{plan.units[u].rating_cone_index_pa,
+                                           plan.units[u].soil_name, plan.units[u].bekker});
       r.tyre = vehicle.axles[a].tyre;
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;
@@ -95,6 +92,17 @@ MapVerdicts EvaluateMap(const MapPlan& plan, const geo::TerrainLayers& terrain,
     const mobility::CellVerdict v =
         mobility::EvaluateCell(vehicle, criteria, unit_traction[u], terrain.slope_percent[c]);
     out.go_class[c] = static_cast<uint8_t>(v.go_class);
+    switch (v.reason) {
+      case mobility::NoGoReason::kCannotCarry:
+        ++out.no_go_cannot_carry;
+        if (out.cannot_carry_example.empty()) {
+          out.cannot_carry_example = unit_traction[u].immobile_reason;
+        }
+        break;
+      case mobility::NoGoReason::kSoftSoil: ++out.no_go_soft_soil; break;
+      case mobility::NoGoReason::kTraction: ++out.no_go_traction; break;
+      case mobility::NoGoReason::kNone: break;
+    }
     if (v.go_class != mobility::GoClass::kNoData) out.speed_kmh[c] = v.speed_kmh;
   }
   return out;

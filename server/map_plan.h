@@ -46,6 +46,10 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
 struct MapVerdicts {
   std::vector<uint8_t> go_class;  // per cell, mobility::GoClass codes
   std::vector<float> speed_kmh;   // per cell, NaN for no data
+  int64_t no_go_cannot_carry = 0;  // NO-GO cells by reason
+  int64_t no_go_soft_soil = 0;
+  int64_t no_go_traction = 0;
+  std::string cannot_carry_example;  // one solver message, for the summary
 };
 
 // `curves[i]` answers plan.tasks[i]. `soft_soil_vci_pa` is the vehicle cone index for the requested

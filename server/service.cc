@@ -3,11 +3,12 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <future>
 
 #include "cache/curve_key.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
+#include "server/pool_wait.h"
+#include "server/scalability.h"
 #include "solvers/common/errors.h"
 
 namespace gonogo::server {
@@ -25,44 +26,6 @@ const char* RoleFileName(v1::RasterRole role) {
     case v1::RASTER_ROLE_ELEVATION: return "elevation.tif";
     case v1::RASTER_ROLE_SOIL_CLASS: return "soil_class.tif";
     default: return nullptr;
-  }
-}
-
-// `request` and `curve` are what is answered; `source` the stored curve behind it (the same one,
-// except for a similarity hit).
-void FillCurve(const TractionRequest& request, const TractionCurve& curve,
-               const cache::StoredCurve& source, bool hit, v1::TractionCurve* out) {
-  *out->mutable_tyre() = ToProto(request.tyre);
-  out->set_wheel_load_n(request.wheel_load_n);
-  *out->mutable_soil() = ToProto(request.soil);
-  for (const TractionPoint& p : curve.points) *out->add_points() = ToProto(p);
-  v1::Provenance* prov = out->mutable_provenance();
-  prov->set_tier(source.curve.tier);
-  prov->set_tier_version(source.curve.tier_version);
-  prov->set_cache_key(source.cache_key);
-  prov->set_cache_hit(hit);
-  prov->set_computed_by(source.computed_by);
-  prov->set_compute_seconds(source.compute_seconds);
-  prov->set_computed_unix_ms(source.computed_unix_ms);
-}
-
-void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {
-  FillCurve(s.request, s.curve, s, hit, out);
-}
-
-void FillAnswer(const TractionRequest& request, const CachedAnswer& a, v1::TractionCurve* out) {
-  FillCurve(request, a.curve, a.source, true, out);
-  if (!a.similarity) return;
-  v1::Provenance* prov = out->mutable_provenance();
-  prov->set_similarity_hit(true);
-  prov->set_similarity_scale_ratio(a.scale_ratio);
-  if (a.reliability) {
-    v1::SimilarityReliability* r = prov->mutable_reliability();
-    r->set_reference_soil(a.reliability->soil);
-    r->set_reference_scale(a.reliability->scale);
-    r->set_drawbar_pull_pct(a.reliability->drawbar_pull_pct);
-    r->set_gross_traction_pct(a.reliability->gross_traction_pct);
-    r->set_efficiency_pct(a.reliability->efficiency_pct);
   }
 }
 
@@ -261,43 +224,37 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     TractionRequest r;
     r.tyre = FromProto(request->tyre());
     r.wheel_load_n = request->wheel_load_n();
-    r.soil = FromProto(request->soil());
-    if (!tier.UsesSoilName()) {
-      r.soil.soil_name.clear();
-      r.soil.bekker.reset();
-    }
+    r.soil = SoilForTier(tier, FromProto(request->soil()));
     r.slips = TractionRequest::SlipSweep(request->slip_step() == 0 ? 0.05 : request->slip_step());
     r.Validate();
     tier.ValidateSoil(r.soil, "soil");
     const TractionRequest q = cache::Quantise(r);
     const std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
     if (auto found = LookUpCurve(curves_, tier, q, key, !request->disable_similarity())) {
+      if (!found->curve.immobile_reason.empty()) {
+        return {grpc::StatusCode::INVALID_ARGUMENT, found->curve.immobile_reason};
+      }
       FillAnswer(q, *found, response);
       return grpc::Status::OK;
     }
     // Not cached: the pool computes it; this handler waits on the answer, not on the solver.
-    auto promise = std::make_shared<std::promise<TaskResult>>();
-    auto future = promise->get_future();
-    const uint64_t task_id = next_task_id_++;
-    pool_.Submit(TaskSpec{task_id, tier.Name(), q, 0},
-                 [promise](TaskResult result) { promise->set_value(std::move(result)); });
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::milliseconds(limits_.curve_timeout_ms);
-    while (future.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
-      if (context->IsCancelled() || std::chrono::steady_clock::now() > deadline) {
-        pool_.Cancel(task_id);
-        return {grpc::StatusCode::DEADLINE_EXCEEDED, "the traction curve was not ready in time"};
-      }
-    }
-    TaskResult result = future.get();
+    TaskResult result = std::move(RunAndWait(pool_, {TaskSpec{next_task_id_++, tier.Name(), q, 0}},
+                                             deadline, [context] { return context->IsCancelled(); })
+                                      .front());
     if (!result.ok) {
-      return {result.cancelled ? grpc::StatusCode::UNAVAILABLE : grpc::StatusCode::INVALID_ARGUMENT,
-              result.error};
+      return {result.cancelled ? grpc::StatusCode::DEADLINE_EXCEEDED
+                               : grpc::StatusCode::INVALID_ARGUMENT,
+              result.cancelled ? "the traction curve was not ready in time" : result.error};
     }
     result.curve.tier = tier.Name();
     cache::StoredCurve stored{key, q, result.curve, result.computed_by, result.compute_seconds,
                               NowMs()};
     curves_.Put(stored);
+    if (!stored.curve.immobile_reason.empty()) {
+      return {grpc::StatusCode::INVALID_ARGUMENT, stored.curve.immobile_reason};
+    }
     FillCurve(stored, false, response);
     return grpc::Status::OK;
   } catch (...) {
@@ -324,6 +281,25 @@ grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext*,
     const cache::CurvePage page = curves_.List(filter, page_size, before);
     for (const auto& c : page.curves) FillCurve(c, true, response->add_curves());
     if (page.next_after_id) response->set_next_page_token(std::to_string(page.next_after_id));
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+}  // namespace gonogo::server
+
+namespace gonogo::server {
+
+grpc::Status MobilityServiceImpl::RunScalability(grpc::ServerContext* context,
+                                                 const v1::ScalabilityRequest* request,
+                                                 v1::ScalabilityReport* response) {
+  try {
+    if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::milliseconds(limits_.curve_timeout_ms);
+    *response = RunScalabilityStudy(*request, tiers_, pool_, curves_, next_task_id_, deadline,
+                                    [context] { return context->IsCancelled(); });
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());

@@ -45,6 +45,8 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                                 v1::TractionCurve*) override;
   grpc::Status ListTractionCurves(grpc::ServerContext*, const v1::ListTractionCurvesRequest*,
                                   v1::ListTractionCurvesResponse*) override;
+  grpc::Status RunScalability(grpc::ServerContext*, const v1::ScalabilityRequest*,
+                              v1::ScalabilityReport*) override;
 
  private:
   JobManager& jobs_;

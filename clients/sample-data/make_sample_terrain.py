@@ -44,9 +44,15 @@ SOIL_NODATA = 0
 SOIL_CLASSES = [
     # Remolding index: share of cone index left after traffic remoulds the soil (WES practice).
     # Clean sand loses little; wet clays lose most.
-    {"code": 1, "name": "sand", "uscs": "SP", "remolding_index": 0.90},
-    {"code": 2, "name": "silt loam", "uscs": "ML", "remolding_index": 0.75},
-    {"code": 3, "name": "clay", "uscs": "CH", "remolding_index": 0.55},
+    # bekker_soil: the Bekker-Janosi parameter set the bekker tier uses (Wong, Theory of Ground
+    # Vehicles, Table 2.3, via solvers/terramech/data/bekker_soils.csv); the library has no silt
+    # loam, so the sandy loam stands in for it.
+    {"code": 1, "name": "sand", "uscs": "SP", "remolding_index": 0.90,
+     "bekker_soil": "lll_dry_sand"},
+    {"code": 2, "name": "silt loam", "uscs": "ML", "remolding_index": 0.75,
+     "bekker_soil": "lll_sandy_loam_15pct"},
+    {"code": 3, "name": "clay", "uscs": "CH", "remolding_index": 0.55,
+     "bekker_soil": "wes_lean_clay_32pct"},
 ]
 
 

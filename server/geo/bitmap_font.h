@@ -1,5 +1,5 @@
-// A tiny 5x7 bitmap font for the quicklook legend (internal). GDAL renders no text, and the legend
-// needs only a handful of characters: "GO", "SLOW-GO", "NO-GO", "no data".
+// A tiny 5x7 bitmap font for the quicklook legend and the line plots (internal). GDAL renders no
+// text, and the products need only plain labels: letters, digits and a little punctuation.
 #pragma once
 
 #include <string>
@@ -16,7 +16,12 @@ inline constexpr int kGlyphAdvance = kGlyphWidth + 1;
 int TextWidthPx(const std::string& text, int scale);
 
 // Draws `text` with its top-left corner at (x, y), each font pixel a scale x scale square. Glyphs
-// exist for G L N O S W - space and a d n o t; any other character draws as a hollow box.
+// exist for A-Z, a-z, 0-9, space and . , - + = / ( ) % : _ '; any other character draws as a
+// hollow box, so a missing glyph is visible rather than silently blank.
 void DrawText(RgbaImage& image, int x, int y, const std::string& text, int scale, Rgba colour);
+
+// Draws `text` turned 90 degrees counter-clockwise (reading bottom to top, as a y-axis label), in
+// the box with top-left corner (x, y), kGlyphHeight * scale wide and TextWidthPx(text, scale) tall.
+void DrawTextUp(RgbaImage& image, int x, int y, const std::string& text, int scale, Rgba colour);
 
 }  // namespace gonogo::geo::internal

@@ -152,21 +152,23 @@ RgbaImage RenderQuicklook(int width, int height, const std::vector<uint8_t>& go_
   return image;
 }
 
-void WritePng(const RgbaImage& image, const std::string& path) {
+void WritePng(const RgbaImage& image, const std::string& path, bool with_alpha) {
   GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
   GDALDriver* png = GetGDALDriverManager()->GetDriverByName("PNG");
   if (mem == nullptr || png == nullptr) throw std::runtime_error("GDAL MEM or PNG driver missing");
-  GDALDatasetUniquePtr rgba(mem->Create("", image.width, image.height, 4, GDT_Byte, nullptr));
-  if (rgba == nullptr) throw std::runtime_error("cannot create the quicklook image");
-  // One call for all four bands of the pixel-interleaved buffer.
-  const CPLErr written =
-      rgba->RasterIO(GF_Write, 0, 0, image.width, image.height,
-                     const_cast<uint8_t*>(image.pixels.data()), image.width, image.height, GDT_Byte,
-                     4, nullptr, 4, 4 * static_cast<GSpacing>(image.width), 1, nullptr);
-  if (written != CE_None) throw std::runtime_error("cannot fill the quicklook image");
-  rgba->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand);
+  const int bands = with_alpha ? 4 : 3;
+  GDALDatasetUniquePtr pixels(mem->Create("", image.width, image.height, bands, GDT_Byte, nullptr));
+  if (pixels == nullptr) throw std::runtime_error("cannot create the PNG image in memory");
+  // One call for all bands of the pixel-interleaved buffer (RGB takes the first three bytes of
+  // each pixel's four).
+  const CPLErr written = pixels->RasterIO(GF_Write, 0, 0, image.width, image.height,
+                                          const_cast<uint8_t*>(image.pixels.data()), image.width,
+                                          image.height, GDT_Byte, bands, nullptr, 4,
+                                          4 * static_cast<GSpacing>(image.width), 1, nullptr);
+  if (written != CE_None) throw std::runtime_error("cannot fill the PNG image in memory");
+  if (with_alpha) pixels->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand);
   const char* const options[] = {"ZLEVEL=6", nullptr};
-  GDALDatasetUniquePtr out(png->CreateCopy(path.c_str(), rgba.get(), FALSE,
+  GDALDatasetUniquePtr out(png->CreateCopy(path.c_str(), pixels.get(), FALSE,
                                            const_cast<char**>(options), nullptr, nullptr));
   if (out == nullptr) {
     throw std::runtime_error("cannot write " + path + ": " + GdalErrorScope::LastMessage());

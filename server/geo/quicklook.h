@@ -33,7 +33,8 @@ void QuicklookMapSize(int width, int height, int* map_width_px, int* map_height_
 // vanishes from the overview; enlarged by pixel replication) with a legend panel on its right.
 RgbaImage RenderQuicklook(int width, int height, const std::vector<uint8_t>& go_class);
 
-// Writes `image` as a PNG file at `path` (throws std::runtime_error on failure).
-void WritePng(const RgbaImage& image, const std::string& path);
+// Writes `image` as a PNG file at `path`: RGBA, or RGB when `with_alpha` is false (opaque images
+// such as plots then need no alpha channel). Throws std::runtime_error on failure.
+void WritePng(const RgbaImage& image, const std::string& path, bool with_alpha = true);
 
 }  // namespace gonogo::geo::internal

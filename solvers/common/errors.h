@@ -18,6 +18,13 @@ class InputError : public std::invalid_argument {
   std::string field_;
 };
 
+// The soil cannot carry the wheel (it would sink past its axle). A solver throws it; a tier turns it
+// into an immobile TractionCurve, because for a map this is an answer (NO-GO), not a failure.
+class CannotCarryError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 // A request that exceeds a configured limit (maps to RESOURCE_EXHAUSTED).
 class LimitError : public std::runtime_error {
  public:

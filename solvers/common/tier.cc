@@ -4,6 +4,15 @@
 
 namespace gonogo {
 
+SoilState SoilForTier(const TractionTier& tier, SoilState soil) {
+  if (!tier.UsesConeIndex()) soil.cone_index_pa = 0;
+  if (!tier.UsesSoilName()) {
+    soil.soil_name.clear();
+    soil.bekker.reset();
+  }
+  return soil;
+}
+
 void TierRegistry::Register(std::unique_ptr<TractionTier> tier) {
   const std::string name = tier->Name();
   tiers_[name] = std::move(tier);

@@ -28,8 +28,10 @@ class TractionTier {
   virtual std::string Name() const = 0;
   // Bumped whenever the numbers a tier returns could change; part of every cache key.
   virtual std::string Version() const = 0;
-  // False when the tier reads only the cone index (its cache keys then ignore the soil name and
-  // the Bekker parameters).
+  // Which parts of a SoilState the tier reads. What it does not read is stripped before planning
+  // and keying (SoilForTier), so that it neither splits terrain units nor cache keys.
+  virtual bool UsesConeIndex() const { return true; }
+  // The soil name and explicit Bekker parameters.
   virtual bool UsesSoilName() const { return false; }
   // Checks, before any work is queued, that the tier can resolve this soil (library name, explicit
   // parameters); throws InputError naming `field`. Cheap: no solver work.
@@ -43,6 +45,9 @@ class TractionTier {
     return Compute(request);
   }
 };
+
+// The soil with only the parts `tier` reads.
+SoilState SoilForTier(const TractionTier& tier, SoilState soil);
 
 class TierRegistry {
  public:

@@ -69,7 +69,9 @@ struct TractionPoint {
 struct TractionCurve {
   std::string tier;          // tier name, e.g. "empirical"
   std::string tier_version;  // changes whenever the tier's numbers could change
-  std::vector<TractionPoint> points;
+  std::vector<TractionPoint> points;  // empty when immobile
+  // Non-empty when the soil cannot carry the wheel at all: why (the vehicle is NO-GO there).
+  std::string immobile_reason;
 
   // Linear interpolation of drawbar pull (N) at slip s within the sweep.
   double DrawbarPullAt(double slip) const;

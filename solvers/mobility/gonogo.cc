@@ -49,6 +49,12 @@ void Criteria::Validate() const {
 VehicleTraction CombineAxles(const VehicleSpec& v, const std::vector<const TractionCurve*>& curves) {
   Require(curves.size() == v.axles.size(), "curves", "one traction curve per axle is needed");
   VehicleTraction t;
+  for (const TractionCurve* c : curves) {
+    if (!c->immobile_reason.empty()) {
+      t.immobile_reason = c->immobile_reason;
+      return t;
+    }
+  }
   for (const TractionPoint& p : curves[0]->points) t.slip.push_back(p.slip);
   t.drawbar_pull_n.assign(t.slip.size(), 0.0);
   t.gross_traction_n.assign(t.slip.size(), 0.0);
@@ -70,14 +76,16 @@ VehicleTraction CombineAxles(const VehicleSpec& v, const std::vector<const Tract
 
 CellVerdict EvaluateCell(const VehicleSpec& v, const Criteria& c, const VehicleTraction& t,
                          double slope_percent) {
-  if (!std::isfinite(slope_percent) || t.slip.empty()) return {GoClass::kNoData, 0.0f};
-  if (!t.soft_soil_ok) return {GoClass::kNoGo, 0.0f};
+  if (!std::isfinite(slope_percent)) return {GoClass::kNoData, 0.0f};
+  if (!t.immobile_reason.empty()) return {GoClass::kNoGo, 0.0f, NoGoReason::kCannotCarry};
+  if (t.slip.empty()) return {GoClass::kNoData, 0.0f};
+  if (!t.soft_soil_ok) return {GoClass::kNoGo, 0.0f, NoGoReason::kSoftSoil};
   const double weight_n = v.WeightN();
   const double grade_sin = std::sin(std::atan(std::abs(slope_percent) / 100.0));
   const double required_n = weight_n * grade_sin;
 
   const double s_star = BalancingSlip(t, required_n, c.max_slip);
-  if (s_star < 0) return {GoClass::kNoGo, 0.0f};
+  if (s_star < 0) return {GoClass::kNoGo, 0.0f, NoGoReason::kTraction};
 
   const double margin_at_design =
       Interpolate(t.slip, t.drawbar_pull_n, c.design_slip) / weight_n - grade_sin;

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "solvers/common/traction.h"
@@ -39,6 +40,7 @@ struct VehicleTraction {
   std::vector<double> drawbar_pull_n;    // sum over all wheels (non-driven wheels: their resistance)
   std::vector<double> gross_traction_n;  // sum over driven wheels
   bool soft_soil_ok = true;              // NRMM RCI >= VCI (empirical tier), else true
+  std::string immobile_reason;           // non-empty: some wheel cannot be carried at all
 };
 
 // Sums per-axle curves (one curve per axle, each for one wheel of that axle) into the vehicle's
@@ -47,9 +49,13 @@ struct VehicleTraction {
 VehicleTraction CombineAxles(const VehicleSpec& vehicle,
                              const std::vector<const TractionCurve*>& curve_per_axle);
 
+// Why a cell is NO-GO, for the summary.
+enum class NoGoReason : uint8_t { kNone = 0, kCannotCarry, kSoftSoil, kTraction };
+
 struct CellVerdict {
   GoClass go_class = GoClass::kNoData;
   float speed_kmh = 0;
+  NoGoReason reason = NoGoReason::kNone;
 };
 
 CellVerdict EvaluateCell(const VehicleSpec& vehicle, const Criteria& criteria,

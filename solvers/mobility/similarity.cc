@@ -62,6 +62,47 @@ TractionCurve FromDimensionless(const TractionRequest& target,
   return c;
 }
 
+namespace {
+// Sample standard deviation of a field over the points.
+template <typename Field>
+double StandardDeviation(const std::vector<DimensionlessPoint>& points, Field field) {
+  if (points.size() < 2) return 0;
+  double mean = 0;
+  for (const auto& p : points) mean += field(p);
+  mean /= points.size();
+  double sum = 0;
+  for (const auto& p : points) sum += (field(p) - mean) * (field(p) - mean);
+  return std::sqrt(sum / (points.size() - 1));
+}
+}  // namespace
+
+BandWidths FullScaleBand(const std::vector<DimensionlessPoint>& f) {
+  return {StandardDeviation(f, [](const auto& p) { return p.drawbar_pull_coefficient; }),
+          StandardDeviation(f, [](const auto& p) { return p.gross_traction_coefficient; }),
+          StandardDeviation(f, [](const auto& p) { return p.tractive_efficiency; })};
+}
+
+BandAgreement CompareToFullScale(const std::vector<DimensionlessPoint>& full,
+                                 const std::vector<DimensionlessPoint>& scaled) {
+  Require(full.size() == scaled.size() && !full.empty(), "scales",
+          "full-scale and scaled curves must share one slip sweep");
+  const BandWidths band = FullScaleBand(full);
+  int d = 0, t = 0, e = 0;
+  for (size_t i = 0; i < full.size(); ++i) {
+    Require(std::abs(full[i].slip - scaled[i].slip) < 1e-9, "scales",
+            "full-scale and scaled curves must share one slip sweep");
+    // A hair of tolerance so that identical curves with a zero-width band count as inside.
+    d += std::abs(scaled[i].drawbar_pull_coefficient - full[i].drawbar_pull_coefficient) <=
+         band.drawbar_pull + 1e-12;
+    t += std::abs(scaled[i].gross_traction_coefficient - full[i].gross_traction_coefficient) <=
+         band.gross_traction + 1e-12;
+    e += std::abs(scaled[i].tractive_efficiency - full[i].tractive_efficiency) <=
+         band.efficiency + 1e-12;
+  }
+  const double n = static_cast<double>(full.size());
+  return {100.0 * d / n, 100.0 * t / n, 100.0 * e / n};
+}
+
 ScalabilityTable ScalabilityTable::Parse(const std::string& csv) {
   ScalabilityTable t;
   std::istringstream lines(csv);

@@ -49,6 +49,26 @@ std::vector<DimensionlessPoint> ToDimensionless(const TractionRequest& request,
 TractionCurve FromDimensionless(const TractionRequest& target,
                                 const std::vector<DimensionlessPoint>& points);
 
+// The comparison of seed 001 section 6.4 for a model: the percentage of a scaled tyre's points
+// inside the full-scale tyre's one-standard-deviation band. The seed's band is the scatter of its DEM
+// data; a model curve has no scatter, so the band here is the full-scale curve +- the standard
+// deviation of the full-scale coefficient over the slip sweep (the spread of the full-scale data set
+// the seed draws its band from). Points are compared slip by slip; both curves share the sweep.
+struct BandAgreement {
+  double drawbar_pull_pct = 0;     // D/W
+  double gross_traction_pct = 0;   // T/(rW)
+  double efficiency_pct = 0;
+};
+struct BandWidths {
+  double drawbar_pull = 0;         // one standard deviation of the full-scale D/W
+  double gross_traction = 0;
+  double efficiency = 0;
+};
+BandWidths FullScaleBand(const std::vector<DimensionlessPoint>& full_scale);
+// Throws InputError("scales") when the sweeps differ.
+BandAgreement CompareToFullScale(const std::vector<DimensionlessPoint>& full_scale,
+                                 const std::vector<DimensionlessPoint>& scaled);
+
 // Seed 001 Tables 7 and 8: percent of scaled-tyre points inside the full-scale one-standard-
 // deviation band.
 struct ScalabilityRecord {

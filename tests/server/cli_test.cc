@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -88,6 +89,20 @@ TEST_F(CliTest, CurveCsvHasTheDocumentedColumns) {
                            "--section-height 0.2178 --deflection 0.0327 --wheel-load 13438 "
                            "--cone-index 500 --csv");
   EXPECT_EQ(wheel.exit_code, 0) << wheel.out;
+}
+
+TEST_F(CliTest, ScalabilityWritesThePlotAndTables) {
+  const fs::path out = scratch_->path() / "scalability";
+  const CliRun r = Gonogo(server_->endpoint(), "scalability --tier empirical --vehicle " + Vehicle() +
+                                                   " --cone-index 800 --scales 1,0.7,0.5 --out " +
+                                                   out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("2NS 0.7: 100  97.1  100"), std::string::npos) << r.out;
+  for (const char* f : {"scalability.png", "scalability_curves.csv", "scalability_summary.csv"}) {
+    EXPECT_GT(fs::file_size(out / f), 0u) << f;
+  }
+  const std::string summary = ReadFile(out / "scalability_summary.csv");
+  EXPECT_EQ(std::count(summary.begin(), summary.end(), '\n'), 4) << summary;
 }
 
 TEST_F(CliTest, BadVehicleFileAndOptionsAreExplained) {

@@ -468,5 +468,128 @@ TEST_F(ServiceTest, SimilarTyreIsAnsweredFromTheCacheUnlessDisabled) {
   EXPECT_FALSE(get(request(0.25, false)).provenance().similarity_hit());
 }
 
+TEST_F(ServiceTest, ScalabilityStudyOfTheEmpiricalTierIsExactlySimilar) {
+  auto stub = server_->Stub();
+  v1::ScalabilityRequest req;
+  req.set_tier("empirical");
+  *req.mutable_tyre() = FedAlpha().axles(0).tyre();
+  req.set_wheel_load_n(13438);
+  req.mutable_soil()->set_cone_index_pa(1e6);
+  for (double k : {1.0, 0.7, 0.5, 0.25}) req.add_scales(k);
+  v1::ScalabilityReport report;
+  {
+    grpc::ClientContext ctx;
+    const grpc::Status s = stub->RunScalability(&ctx, req, &report);
+    ASSERT_TRUE(s.ok()) << s.error_message();
+  }
+  ASSERT_EQ(report.rows_size(), 4);
+  EXPECT_GT(report.band_drawbar_pull(), 0);
+  // Brixius depends on the pi-terms only: every scaled point lies on the full-scale curve.
+  for (const auto& row : report.rows()) {
+    EXPECT_DOUBLE_EQ(row.drawbar_pull_inside_pct(), 100) << row.scale();
+    EXPECT_DOUBLE_EQ(row.efficiency_inside_pct(), 100) << row.scale();
+    EXPECT_FALSE(row.provenance().similarity_hit()) << "every scale is computed";
+  }
+  EXPECT_NEAR(report.rows(2).wheel_load_n(), 13438 * 0.25, 1.0) << "equal W/(b d)";
+  EXPECT_NEAR(report.rows(3).tyre().diameter_m(), 1.011 * 0.25, 1e-4);
+  EXPECT_EQ(report.rows(1).seed_measured().reference_soil(), "2NS");
+  EXPECT_DOUBLE_EQ(report.rows(1).seed_measured().gross_traction_pct(), 97.1);
+  EXPECT_DOUBLE_EQ(report.rows(3).seed_measured().drawbar_pull_pct(), 75.6);
+  ASSERT_GT(report.plot_png().size(), 8u);
+  EXPECT_EQ(report.plot_png().substr(1, 3), "PNG");
+
+  req.set_scales(0, 0.9);
+  grpc::ClientContext bad_ctx;
+  const grpc::Status bad = stub->RunScalability(&bad_ctx, req, &report);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(bad.error_message().rfind("scales:", 0), 0u) << bad.error_message();
+}
+
+TEST_F(ServiceTest, BekkerTierMapsSoilClassesAndExplainsWhatItCannotDo) {
+  auto stub = server_->Stub();
+  v1::MapRequest request = SampleRequest();
+  request.set_tier("bekker");
+  v1::Job job;
+  ASSERT_TRUE(Submit(*stub, request, SampleRasters(), &job).ok());
+  const v1::JobStatus end = WaitForEnd(*stub, job.job_id());
+  ASSERT_EQ(end.state(), v1::JOB_STATE_DONE) << end.message();
+  // The bekker tier reads the soil, not the cone index: one curve per soil class and axle.
+  EXPECT_EQ(end.tasks_total(), 3u * 2u);
+
+  // Cone-index-only terrain stays on the empirical tier.
+  v1::Job rejected;
+  grpc::Status s = Submit(*stub, request,
+                          {{v1::RASTER_ROLE_CONE_INDEX, Terrain("cone_index.tif")},
+                           {v1::RASTER_ROLE_SLOPE, Terrain("slope.tif")}},
+                          &rejected);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(s.error_message().rfind("soil_class:", 0), 0u) << s.error_message();
+  // A class naming no library soil.
+  v1::MapRequest unknown = request;
+  unknown.mutable_soil_table()->mutable_classes(1)->set_bekker_soil("moon dust");
+  s = Submit(*stub, unknown, SampleRasters(), &rejected);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("soil_table.classes[code 2]"), std::string::npos)
+      << s.error_message();
+  // Non-physical explicit parameters.
+  v1::MapRequest bad = request;
+  v1::BekkerParameters* p = bad.mutable_soil_table()->mutable_classes(0)->mutable_bekker();
+  p->set_n(0.7);
+  p->set_kc(5270);
+  p->set_kphi(1515040);
+  p->set_cohesion_pa(1720);
+  p->set_friction_angle_deg(95);
+  p->set_shear_deformation_m(0.025);
+  s = Submit(*stub, bad, SampleRasters(), &rejected);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("friction_angle_deg"), std::string::npos) << s.error_message();
+
+  // A soil that cannot carry the wheel: its cells are NO-GO with the reason, never NaN.
+  v1::MapRequest snow = request;
+  for (auto& c : *snow.mutable_soil_table()->mutable_classes()) c.set_bekker_soil("snow_us");
+  ASSERT_TRUE(Submit(*stub, snow, SampleRasters(), &job).ok());
+  ASSERT_EQ(WaitForEnd(*stub, job.job_id()).state(), v1::JOB_STATE_DONE);
+  grpc::ClientContext ctx;
+  v1::GetJobRequest get;
+  get.set_job_id(job.job_id());
+  v1::Job done;
+  ASSERT_TRUE(stub->GetJob(&ctx, get, &done).ok());
+  const json summary = json::parse(done.summary_json());
+  EXPECT_EQ(summary["classes"]["NO-GO"]["cells"], summary["cells"]["valid"]);
+  EXPECT_EQ(summary["no_go_cells_by_reason"]["soil_cannot_carry_the_wheel"],
+            summary["cells"]["valid"]);
+  EXPECT_NE(summary["no_go_cells_by_reason"]["soil_cannot_carry_example"].get<std::string>().find(
+                "sink past its axle"),
+            std::string::npos);
+
+  // A single wheel the soil cannot carry: a clear error, not a curve.
+  v1::GetTractionCurveRequest curve_req;
+  curve_req.set_tier("bekker");
+  *curve_req.mutable_tyre() = FedAlpha().axles(0).tyre();
+  curve_req.mutable_tyre()->set_inflation_pressure_pa(0);  // rigid
+  curve_req.set_wheel_load_n(14513);
+  curve_req.mutable_soil()->set_soil_name("snow_us");
+  v1::TractionCurve curve;
+  grpc::ClientContext c1;
+  s = stub->GetTractionCurve(&c1, curve_req, &curve);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(s.error_message().rfind("wheel_load_n: the soil cannot carry", 0), 0u)
+      << s.error_message();
+  // Explicit parameters (LETE sand, Wong's Table 2.3) work without a library name.
+  curve_req.mutable_soil()->clear_soil_name();
+  v1::BekkerParameters* lete = curve_req.mutable_soil()->mutable_bekker();
+  lete->set_n(0.79);
+  lete->set_kc(102000);
+  lete->set_kphi(5301000);
+  lete->set_cohesion_pa(1300);
+  lete->set_friction_angle_deg(31.1);
+  lete->set_shear_deformation_m(0.0115);
+  grpc::ClientContext c2;
+  s = stub->GetTractionCurve(&c2, curve_req, &curve);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_GT(curve.points(8).drawbar_pull_n(), 0) << "LETE sand pulls at 40 % slip";
+  for (const auto& pt : curve.points()) EXPECT_TRUE(std::isfinite(pt.drawbar_pull_n()));
+}
+
 }  // namespace
 }  // namespace gonogo::testing

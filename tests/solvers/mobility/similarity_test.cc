@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "solvers/common/errors.h"
 #include "solvers/terramech/empirical_tier.h"
 
 namespace gonogo::mobility {
@@ -78,6 +79,25 @@ TEST(Dimensionless, ScaledEmpiricalCurveEqualsTheDirectComputation) {
       EXPECT_NEAR(b.tractive_efficiency, a.tractive_efficiency, 1e-12) << k;
     }
   }
+}
+
+TEST(BandAgreement, CountsPointsInsideTheFullScaleStandardDeviation) {
+  // Full scale D/W = 0, 0.1, ..., 0.4 over five slips: sample SD = sqrt(0.025) = 0.158.
+  std::vector<DimensionlessPoint> full, scaled;
+  for (int i = 0; i < 5; ++i) {
+    full.push_back({0.25 * i, 0.1 * i, 0.2 * i, 0, 0.1 * i, 0});
+    scaled.push_back(full.back());
+  }
+  EXPECT_NEAR(FullScaleBand(full).drawbar_pull, std::sqrt(0.025), 1e-12);
+  BandAgreement same = CompareToFullScale(full, scaled);
+  EXPECT_DOUBLE_EQ(same.drawbar_pull_pct, 100);
+  EXPECT_DOUBLE_EQ(same.efficiency_pct, 100);
+  scaled[1].drawbar_pull_coefficient += 0.15;  // inside (0.15 < 0.158)
+  scaled[2].drawbar_pull_coefficient -= 0.17;  // outside
+  scaled[3].drawbar_pull_coefficient += 0.50;  // outside
+  EXPECT_DOUBLE_EQ(CompareToFullScale(full, scaled).drawbar_pull_pct, 60);
+  scaled.pop_back();
+  EXPECT_THROW(CompareToFullScale(full, scaled), InputError);
 }
 
 TEST(ScalabilityTable, Seed001FiguresByScaleAndSoil) {
