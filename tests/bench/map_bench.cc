@@ -1,17 +1,22 @@
 // Map throughput and cache latency.
 //
-//   build/tests/bench/gonogo-bench-map [--size 1000] [--lookups 10000]
+//   build/tests/bench/gonogo-bench-map [--size 1000] [--lookups 10000] [--tier empirical]
+//                                      [--soil-classes N]
 //
 // Makes a SIZE x SIZE sample terrain, starts gonogo-server (embedded default) on a fresh data
-// directory, and times the same empirical-tier map end to end (upload, plan, traction tasks, cell
-// evaluation, products, download) twice: cold cache, then warm. Then times traction-curve lookups
-// in the SQLite cache that the cold run filled.
+// directory, and times the same map end to end (upload, plan, traction tasks, cell evaluation,
+// products, download) twice: cold cache, then warm. Then times traction-curve lookups in the SQLite
+// cache that the cold run filled. --soil-classes N replaces the sample's 3 soil classes by N
+// vertical stripes, each mapped to a soil of the Bekker library (for --tier bekker).
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
+
+#include <gdal.h>
+#include <ogr_srs_api.h>
 
 #include "cache/curve_store.h"
 #include "cache/database.h"
@@ -32,13 +37,54 @@ struct MapRun {
   nlohmann::json summary;
 };
 
-MapRun RunMap(const ServerProcess& server, const fs::path& terrain) {
+// Library soils for --soil-classes (the Bekker library without its snows).
+const char* kLibrarySoils[] = {
+    "lll_dry_sand", "lll_sandy_loam_15pct", "lll_sandy_loam_22pct", "michigan_sandy_loam_11pct",
+    "michigan_sandy_loam_23pct", "hanamoto_sandy_loam_26pct", "hanamoto_sandy_loam_32pct",
+    "thailand_clayey_soil_38pct", "thailand_clayey_soil_55pct", "wes_heavy_clay_25pct",
+    "wes_heavy_clay_40pct", "wes_lean_clay_22pct", "wes_lean_clay_32pct", "lete_sand",
+    "upland_sandy_loam_51pct", "rubicon_sandy_loam_43pct", "north_gower_clayey_loam_46pct",
+    "grenville_loam_24pct"};
+
+// Rewrites soil_class.tif as `classes` vertical stripes on the cone-index grid; returns the table.
+v1::SoilTable StripeSoils(const fs::path& terrain, int classes) {
+  GDALAllRegister();
+  GDALDatasetH ci = GDALOpen((terrain / "cone_index.tif").c_str(), GA_ReadOnly);
+  const int w = GDALGetRasterXSize(ci), h = GDALGetRasterYSize(ci);
+  double gt[6];
+  GDALGetGeoTransform(ci, gt);
+  GDALDatasetH out = GDALCreate(GDALGetDriverByName("GTiff"), (terrain / "soil_class.tif").c_str(),
+                                w, h, 1, GDT_Byte, nullptr);
+  GDALSetGeoTransform(out, gt);
+  GDALSetSpatialRef(out, GDALGetSpatialRef(ci));
+  std::vector<uint8_t> codes(static_cast<size_t>(w) * h);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) codes[static_cast<size_t>(r) * w + c] = 1 + c * classes / w;
+  }
+  CPLErr err = GDALRasterIO(GDALGetRasterBand(out, 1), GF_Write, 0, 0, w, h, codes.data(), w, h,
+                            GDT_Byte, 0, 0);
+  (void)err;
+  GDALClose(out);
+  GDALClose(ci);
+  v1::SoilTable table;
+  const int library = sizeof kLibrarySoils / sizeof kLibrarySoils[0];
+  for (int k = 0; k < classes; ++k) {
+    v1::SoilClass* c = table.add_classes();
+    c->set_code(k + 1);
+    c->set_name("class " + std::to_string(k + 1));
+    c->set_bekker_soil(kLibrarySoils[k % library]);
+  }
+  return table;
+}
+
+MapRun RunMap(const ServerProcess& server, const fs::path& terrain, const std::string& tier,
+              const v1::SoilTable& soils) {
   auto stub = server.Stub();
   v1::MapRequest request;
   request.set_name("bench");
-  request.set_tier("empirical");
+  request.set_tier(tier);
   *request.mutable_vehicle() = FedAlpha();
-  *request.mutable_soil_table() = SampleSoilTable(terrain);
+  *request.mutable_soil_table() = soils;
   const auto start = Clock::now();
   const std::vector<std::pair<v1::RasterRole, std::string>> rasters = {
       {v1::RASTER_ROLE_CONE_INDEX, ReadFile(terrain / "cone_index.tif")},
@@ -63,19 +109,25 @@ MapRun RunMap(const ServerProcess& server, const fs::path& terrain) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int size = 1000, lookups = 10000;
+  int size = 1000, lookups = 10000, soil_classes = 0;
+  std::string tier = "empirical";
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--size")) size = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lookups")) lookups = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--tier")) tier = argv[i + 1];
+    if (!std::strcmp(argv[i], "--soil-classes")) soil_classes = std::atoi(argv[i + 1]);
   }
   ScratchDir dir("bench");
   const fs::path terrain = dir.path() / "terrain";
   if (!MakeSampleTerrain(terrain, size)) return 1;
-  std::printf("map %d x %d cells, empirical tier, FED Alpha, embedded server\n", size, size);
+  const v1::SoilTable soils =
+      soil_classes > 0 ? StripeSoils(terrain, soil_classes) : SampleSoilTable(terrain);
+  std::printf("map %d x %d cells, %s tier, %d soil classes, FED Alpha, embedded server\n", size,
+              size, tier.c_str(), soils.classes_size());
   {
     ServerProcess server(dir.path() / "data");
-    const MapRun cold = RunMap(server, terrain);
-    const MapRun warm = RunMap(server, terrain);
+    const MapRun cold = RunMap(server, terrain, tier, soils);
+    const MapRun warm = RunMap(server, terrain, tier, soils);
     const double cells = double(size) * size;
     std::printf("terrain units %d\n", cold.summary["terrain_units"].get<int>());
     std::printf("%-6s %10s %12s %8s %10s %10s\n", "cache", "seconds", "cells/s", "tasks", "computed",
