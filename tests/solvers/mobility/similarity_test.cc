@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
+#include "solvers/terramech/bekker_tier.h"
 #include "solvers/terramech/empirical_tier.h"
 
 namespace gonogo::mobility {
@@ -77,6 +78,43 @@ TEST(Dimensionless, ScaledEmpiricalCurveEqualsTheDirectComputation) {
       EXPECT_NEAR(b.torque_nm, a.torque_nm, 1e-9 * small.wheel_load_n) << k;
       EXPECT_NEAR(b.sinkage_m, a.sinkage_m, 1e-12) << k;
       EXPECT_NEAR(b.tractive_efficiency, a.tractive_efficiency, 1e-12) << k;
+    }
+  }
+}
+
+// The Bekker tier's own similarity law. On a purely frictional soil (c = 0, kc = 0) the Wong-Reece
+// stresses are kphi z^n and tan(phi) times that, so scaling every length (wheel, sinkage and the
+// shear modulus K) by k scales stresses by k^n and forces by k^(n+2): with W ~ k^(n+2) the
+// dimensionless curves must coincide exactly. With seed 001's law W ~ k^2 they must not, unless n = 0,
+// and the direction follows from the model: the smaller tyre then carries relatively more load
+// (k^2 > k^(n+2) for k < 1), so it sinks deeper relative to its size.
+TEST(BekkerSimilarity, FrictionalSoilIsSelfSimilarUnderItsOwnLawNotUnderEqualPressure) {
+  terramech::BekkerTier tier;
+  const double n = 0.8;
+  const BekkerParameters full_soil{n, 0.0, 1.5e6, 0.0, 32.0, 0.02};
+  auto request = [&](double k, double load_exponent) {
+    TractionRequest r;
+    r.soil.bekker = full_soil;
+    r.soil.bekker->shear_deformation_m *= k;
+    r.tyre = TyreGeometry{1.0 * k, 0.3 * k, 0.25 * k, 0.0, 0.0};  // rigid wheel
+    r.wheel_load_n = 6000.0 * std::pow(k, load_exponent);
+    r.slips = TractionRequest::SlipSweep(0.1);
+    return r;
+  };
+  const TractionRequest full = request(1.0, 2.0);
+  const auto reference = ToDimensionless(full, tier.Compute(full));
+  for (double k : {0.7, 0.5}) {
+    const TractionRequest own = request(k, n + 2.0);
+    const auto same = ToDimensionless(own, tier.Compute(own));
+    const TractionRequest seed = request(k, 2.0);
+    const auto differs = ToDimensionless(seed, tier.Compute(seed));
+    for (size_t i = 0; i < reference.size(); ++i) {
+      EXPECT_NEAR(same[i].drawbar_pull_coefficient, reference[i].drawbar_pull_coefficient, 1e-6)
+          << "k " << k << " slip " << reference[i].slip;
+      EXPECT_NEAR(same[i].gross_traction_coefficient, reference[i].gross_traction_coefficient, 1e-6);
+      EXPECT_NEAR(same[i].sinkage_over_diameter, reference[i].sinkage_over_diameter, 1e-7);
+      EXPECT_GT(differs[i].sinkage_over_diameter, reference[i].sinkage_over_diameter * 1.01)
+          << "equal W/(b d) sinks the smaller wheel deeper, k " << k;
     }
   }
 }
