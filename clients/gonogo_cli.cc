@@ -506,7 +506,7 @@ int Scalability(Client& client, const Args& a) {
   std::ofstream summary(out / "scalability_summary.csv");
   summary << "scale,diameter_m,width_m,wheel_load_n,drawbar_pull_inside_pct,"
              "gross_traction_inside_pct,efficiency_inside_pct,seed_soil,seed_scale,"
-             "seed_drawbar_pull_pct,seed_gross_traction_pct,seed_efficiency_pct\n";
+             "seed_drawbar_pull_pct,seed_gross_traction_pct,seed_efficiency_pct,immobile\n";
   std::cout << "band (one SD of the full-scale coefficient): D/W " << report.band_drawbar_pull()
             << ", T/(rW) " << report.band_gross_traction() << ", efficiency "
             << report.band_efficiency() << "\n";
@@ -527,10 +527,15 @@ int Scalability(Client& client, const Args& a) {
             << row.wheel_load_n() << "," << row.drawbar_pull_inside_pct() << ","
             << row.gross_traction_inside_pct() << "," << row.efficiency_inside_pct() << ","
             << m.reference_soil() << "," << m.reference_scale() << "," << m.drawbar_pull_pct()
-            << "," << m.gross_traction_pct() << "," << m.efficiency_pct() << "\n";
+            << "," << m.gross_traction_pct() << "," << m.efficiency_pct() << ","
+            << (row.immobile_reason().empty() ? "" : "yes") << "\n";
     std::ostringstream inside, seed;
     inside << std::fixed << std::setprecision(1) << row.drawbar_pull_inside_pct() << "  "
            << row.gross_traction_inside_pct() << "  " << row.efficiency_inside_pct();
+    if (!row.immobile_reason().empty()) {
+      inside.str("cannot carry");
+      std::cerr << "scale " << row.scale() << ": " << row.immobile_reason() << "\n";
+    }
     if (row.has_seed_measured()) {
       seed << m.reference_soil() << " " << m.reference_scale() << ": " << m.drawbar_pull_pct()
            << "  " << m.gross_traction_pct() << "  " << m.efficiency_pct();

@@ -80,6 +80,7 @@ std::string PlotPng(const v1::ScalabilityRequest& request,
     }
     panel.bands.push_back(b);
     for (size_t i = 0; i < curves.size(); ++i) {
+      if (curves[i].empty()) continue;  // a scale the soil cannot carry
       geo::PlotSeries s;
       std::ostringstream label;
       label << "scale " << request.scales(static_cast<int>(i));
@@ -168,10 +169,12 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
     found[i] = std::move(stored);
   }
 
+  // The full-scale wheel must be carried (it defines the band); a scale model that sinks past its
+  // axle is reported as such.
+  Require(found[0]->curve.immobile_reason.empty(), "tyre",
+          "the full-scale wheel: " + found[0]->curve.immobile_reason);
   std::vector<std::vector<mobility::DimensionlessPoint>> dimensionless;
   for (int i = 0; i < n; ++i) {
-    Require(found[i]->curve.immobile_reason.empty(), "scales",
-            "scale " + std::to_string(request.scales(i)) + ": " + found[i]->curve.immobile_reason);
     dimensionless.push_back(mobility::ToDimensionless(requests[i], found[i]->curve));
   }
   const mobility::BandWidths band = mobility::FullScaleBand(dimensionless[0]);
@@ -181,10 +184,15 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
     row->set_scale(request.scales(i));
     *row->mutable_tyre() = ToProto(requests[i].tyre);
     row->set_wheel_load_n(requests[i].wheel_load_n);
-    const mobility::BandAgreement a = mobility::CompareToFullScale(dimensionless[0], dimensionless[i]);
-    row->set_drawbar_pull_inside_pct(a.drawbar_pull_pct);
-    row->set_gross_traction_inside_pct(a.gross_traction_pct);
-    row->set_efficiency_inside_pct(a.efficiency_pct);
+    if (found[i]->curve.immobile_reason.empty()) {
+      const mobility::BandAgreement a =
+          mobility::CompareToFullScale(dimensionless[0], dimensionless[i]);
+      row->set_drawbar_pull_inside_pct(a.drawbar_pull_pct);
+      row->set_gross_traction_inside_pct(a.gross_traction_pct);
+      row->set_efficiency_inside_pct(a.efficiency_pct);
+    } else {
+      row->set_immobile_reason(found[i]->curve.immobile_reason);
+    }
     for (const TractionPoint& p : found[i]->curve.points) *row->add_points() = ToProto(p);
     if (i > 0) {
       if (auto seed = mobility::ScalabilityTable::Seed001().For(request.scales(i),

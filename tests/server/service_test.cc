@@ -589,6 +589,24 @@ TEST_F(ServiceTest, BekkerTierMapsSoilClassesAndExplainsWhatItCannotDo) {
   ASSERT_TRUE(s.ok()) << s.error_message();
   EXPECT_GT(curve.points(8).drawbar_pull_n(), 0) << "LETE sand pulls at 40 % slip";
   for (const auto& pt : curve.points()) EXPECT_TRUE(std::isfinite(pt.drawbar_pull_n()));
+
+  // The scaled-tyre study on loose dry sand: the quarter-scale wheel sinks past its axle and is
+  // reported as such; the others are compared.
+  v1::ScalabilityRequest study;
+  study.set_tier("bekker");
+  study.mutable_soil()->set_soil_name("lll_dry_sand");
+  *study.mutable_tyre() = FedAlpha().axles(0).tyre();
+  study.set_wheel_load_n(14513);
+  for (double k : {1.0, 0.5, 0.25}) study.add_scales(k);
+  v1::ScalabilityReport report;
+  grpc::ClientContext c3;
+  s = stub->RunScalability(&c3, study, &report);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  ASSERT_EQ(report.rows_size(), 3);
+  EXPECT_TRUE(report.rows(1).immobile_reason().empty());
+  EXPECT_LT(report.rows(1).drawbar_pull_inside_pct(), 100) << "Bekker is not scale-free";
+  EXPECT_NE(report.rows(2).immobile_reason().find("sink past its axle"), std::string::npos);
+  EXPECT_EQ(report.rows(2).points_size(), 0);
 }
 
 }  // namespace
