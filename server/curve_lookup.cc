@@ -42,6 +42,18 @@ void FillCurve(const TractionRequest& request, const TractionCurve& curve,
   out->set_wheel_load_n(request.wheel_load_n);
   *out->mutable_soil() = ToProto(request.soil);
   for (const TractionPoint& p : curve.points) *out->add_points() = ToProto(p);
+  for (const mobility::DimensionlessPoint& p : mobility::ToDimensionless(request, curve)) {
+    v1::DimensionlessPoint* q = out->add_dimensionless();
+    q->set_slip(p.slip);
+    q->set_drawbar_pull_coefficient(p.drawbar_pull_coefficient);
+    q->set_gross_traction_coefficient(p.gross_traction_coefficient);
+    q->set_sinkage_over_diameter(p.sinkage_over_diameter);
+    q->set_tractive_efficiency(p.tractive_efficiency);
+  }
+  const mobility::PiTerms pi = mobility::ComputePiTerms(request);
+  out->mutable_pi_terms()->set_width_over_diameter(pi.width_over_diameter);
+  out->mutable_pi_terms()->set_deflection_over_height(pi.deflection_over_height);
+  out->mutable_pi_terms()->set_load_over_bd_pa(pi.load_over_bd_pa);
   v1::Provenance* prov = out->mutable_provenance();
   prov->set_tier(source.curve.tier);
   prov->set_tier_version(source.curve.tier_version);

@@ -450,6 +450,16 @@ TEST_F(ServiceTest, SimilarTyreIsAnsweredFromTheCacheUnlessDisabled) {
   EXPECT_EQ(similar.provenance().reliability().reference_soil(), "2NS");
   EXPECT_DOUBLE_EQ(similar.provenance().reliability().gross_traction_pct(), 97.1);
   EXPECT_NEAR(similar.tyre().diameter_m(), 0.7077, 1e-4) << "answered for the requested tyre";
+  // Both carry the dimensionless form; for similar tyres it is the same curve.
+  ASSERT_EQ(similar.dimensionless_size(), full.dimensionless_size());
+  for (int i = 0; i < full.dimensionless_size(); ++i) {
+    EXPECT_NEAR(similar.dimensionless(i).drawbar_pull_coefficient(),
+                full.dimensionless(i).drawbar_pull_coefficient(), 1e-12);
+    EXPECT_NEAR(full.dimensionless(i).drawbar_pull_coefficient(),
+                full.points(i).drawbar_pull_n() / full.wheel_load_n(), 1e-12);
+  }
+  EXPECT_NEAR(similar.pi_terms().load_over_bd_pa(), full.pi_terms().load_over_bd_pa(),
+              0.01 * full.pi_terms().load_over_bd_pa());
 
   // The same tyre with similarity off is computed, and for this tier it must agree (the empirical
   // tier depends on the pi-terms only; the residue is the key's quantisation of lengths and load).
