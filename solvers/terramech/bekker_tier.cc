@@ -40,6 +40,20 @@ void BekkerTier::ValidateSoil(const SoilState& soil, const std::string& field) c
   ResolveSoil(soil, field);
 }
 
+namespace {
+// The curve point of a solved wheel state (rigid or flexible: both carry these fields).
+template <typename WheelState>
+TractionPoint PointOf(double slip, const WheelState& s) {
+  return TractionPoint{slip,
+                       s.drawbar_pull_n,
+                       s.torque_nm,
+                       s.sinkage_m,
+                       s.tractive_efficiency,
+                       s.gross_traction_n,
+                       s.motion_resistance_n};
+}
+}  // namespace
+
 TractionCurve BekkerTier::Compute(const TractionRequest& request) const {
   return Compute(request, nullptr);
 }
@@ -65,28 +79,15 @@ TractionCurve BekkerTier::Compute(const TractionRequest& request,
   try {
     for (double slip : request.slips) {
       if (cancelled && cancelled()) throw CancelledError();
-      TractionPoint p;
-      p.slip = slip;
       if (rigid) {
         const RigidWheelState s =
             SolveRigidWheel(soil, radius_m, tyre.width_m, load_n, slip, options_, entry_angle_rad);
         entry_angle_rad = s.entry_angle_rad;
-        p.drawbar_pull_n = s.drawbar_pull_n;
-        p.torque_nm = s.torque_nm;
-        p.sinkage_m = s.sinkage_m;
-        p.tractive_efficiency = s.tractive_efficiency;
-        p.gross_traction_n = s.gross_traction_n;
-        p.motion_resistance_n = s.motion_resistance_n;
+        curve.points.push_back(PointOf(slip, s));
       } else {
-        const FlexibleTyreState s = SolveFlexibleTyre(soil, tyre, inflation_pa, load_n, slip);
-        p.drawbar_pull_n = s.drawbar_pull_n;
-        p.torque_nm = s.torque_nm;
-        p.sinkage_m = s.sinkage_m;
-        p.tractive_efficiency = s.tractive_efficiency;
-        p.gross_traction_n = s.gross_traction_n;
-        p.motion_resistance_n = s.motion_resistance_n;
+        curve.points.push_back(
+            PointOf(slip, SolveFlexibleTyre(soil, tyre, inflation_pa, load_n, slip)));
       }
-      curve.points.push_back(p);
     }
   } catch (const CannotCarryError& e) {
     // Sinkage grows with slip, so one slip the soil cannot carry makes the wheel immobile.
