@@ -176,7 +176,7 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
 }
 
 v1::Job JobManager::Submit(const std::string& id, const v1::MapRequest& request,
-                           const JobInputs&, std::shared_ptr<geo::TerrainLayers> terrain) {
+                           std::shared_ptr<geo::TerrainLayers> terrain) {
   cache::JobRecord rec;
   rec.id = id;
   rec.name = request.name();

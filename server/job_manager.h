@@ -55,7 +55,7 @@ class JobManager {
   std::shared_ptr<geo::TerrainLayers> Validate(const v1::MapRequest& request,
                                                const JobInputs& inputs) const;
   // Persists the job (QUEUED) and queues it. `terrain` may be null (it is then read from the inputs).
-  v1::Job Submit(const std::string& job_id, const v1::MapRequest& request, const JobInputs& inputs,
+  v1::Job Submit(const std::string& job_id, const v1::MapRequest& request,
                  std::shared_ptr<geo::TerrainLayers> terrain);
   // Re-queues the jobs a previous run left QUEUED or RUNNING. Call once, before Start().
   int ResumeUnfinished();

@@ -106,7 +106,7 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
       }
     }
     auto terrain = jobs_.Validate(request, inputs);
-    *response = jobs_.Submit(id, request, inputs, std::move(terrain));
+    *response = jobs_.Submit(id, request, std::move(terrain));
     cleanup.keep = true;
     return grpc::Status::OK;
   } catch (...) {
