@@ -1,0 +1,161 @@
+#include "solvers/dem/neighbor_list.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::dem {
+
+void Box::Validate() const {
+  Require(lo_m.allFinite() && hi_m.allFinite(), "box", "corners must be finite");
+  Require((hi_m - lo_m).minCoeff() > 0.0, "box", "hi_m must exceed lo_m on every axis");
+}
+
+void NeighborList::BinParticles(const Particles& particles, const Box& box, double cell_size_m) {
+  const Vec3 length = box.LengthM();
+  const int n = static_cast<int>(particles.size());
+  // A sparse cloud in a large open box would need more cells than grains: coarsen the grid so
+  // that there are at most about 8 cells per grain (cells only need to be at least the cutoff).
+  const double max_cells = std::max(64.0, 8.0 * n);
+  const double fine_cells = (length / cell_size_m).array().floor().max(1.0).prod();
+  if (fine_cells > max_cells) cell_size_m *= std::cbrt(fine_cells / max_cells);
+  int cells = 1;
+  for (int d = 0; d < 3; ++d) {
+    cell_count_[d] = std::max(1, static_cast<int>(std::floor(length[d] / cell_size_m)));
+    if (box.periodic[d]) {
+      Require(cell_count_[d] >= 3, "box",
+              "a periodic length must be at least 3 (2 r_max + skin) for the minimum image");
+    }
+    cell_size_m_[d] = length[d] / cell_count_[d];
+    cells *= cell_count_[d];
+  }
+  cell_of_particle_.resize(n);
+  cell_start_.assign(cells + 1, 0);
+  for (int p = 0; p < n; ++p) {
+    int index[3];
+    for (int d = 0; d < 3; ++d) {
+      const int c = static_cast<int>(
+          std::floor((particles.position_m[p][d] - box.lo_m[d]) / cell_size_m_[d]));
+      index[d] = std::clamp(c, 0, cell_count_[d] - 1);  // open axes: outliers in edge cells
+    }
+    const int cell = (index[2] * cell_count_[1] + index[1]) * cell_count_[0] + index[0];
+    cell_of_particle_[p] = cell;
+    ++cell_start_[cell + 1];
+  }
+  for (int c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  // Counting sort keeps particle indices ascending inside a cell.
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  cell_particles_.resize(n);
+  for (int p = 0; p < n; ++p) cell_particles_[fill[cell_of_particle_[p]]++] = p;
+}
+
+void NeighborList::Build(const Particles& particles, const Box& box, double skin_m, int threads) {
+  const int n = static_cast<int>(particles.size());
+  double max_radius_m = 0.0;
+  for (double r : particles.radius_m) max_radius_m = std::max(max_radius_m, r);
+  skin_m_ = skin_m;
+  BinParticles(particles, box, 2.0 * max_radius_m + skin_m);
+  const Vec3 length = box.LengthM();
+  per_particle_.resize(n);
+
+  // Each particle i lists the j > i within reach from the 27 surrounding cells.
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int i = 0; i < n; ++i) {
+    std::vector<NeighborPair>& list = per_particle_[i];
+    list.clear();
+    const int cell = cell_of_particle_[i];
+    const int home[3] = {cell % cell_count_[0], (cell / cell_count_[0]) % cell_count_[1],
+                         cell / (cell_count_[0] * cell_count_[1])};
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int offset[3] = {dx, dy, dz};
+          int index[3];
+          std::array<int, 3> wrap = {0, 0, 0};
+          bool skip = false;
+          for (int d = 0; d < 3 && !skip; ++d) {
+            index[d] = home[d] + offset[d];
+            if (cell_count_[d] == 1 && offset[d] != 0) skip = true;
+            if (index[d] < 0 || index[d] >= cell_count_[d]) {
+              if (!box.periodic[d]) {
+                skip = true;
+              } else {
+                wrap[d] = index[d] < 0 ? -1 : 1;
+                index[d] -= wrap[d] * cell_count_[d];
+              }
+            }
+          }
+          if (skip) continue;
+          const int other = (index[2] * cell_count_[1] + index[1]) * cell_count_[0] + index[0];
+          for (int k = cell_start_[other]; k < cell_start_[other + 1]; ++k) {
+            const int j = cell_particles_[k];
+            if (j <= i) continue;
+            // Image of j nearest to i: minimum image on periodic axes.
+            Vec3 shift = Vec3::Zero();
+            std::array<int, 3> image_shift = {0, 0, 0};
+            for (int d = 0; d < 3; ++d) {
+              if (!box.periodic[d]) continue;
+              const double delta = particles.position_m[j][d] - particles.position_m[i][d];
+              image_shift[d] = -static_cast<int>(std::lround(delta / length[d]));
+              shift[d] = image_shift[d] * length[d];
+            }
+            const Vec3 separation = particles.position_m[j] + shift - particles.position_m[i];
+            const double reach = particles.radius_m[i] + particles.radius_m[j] + skin_m;
+            if (separation.squaredNorm() >= reach * reach) continue;
+            NeighborPair pair;
+            pair.i = i;
+            pair.j = j;
+            pair.shift_m = shift;
+            for (int d = 0; d < 3; ++d) {
+              pair.key_shift[d] = image_shift[d] + particles.image[i][d] - particles.image[j][d];
+            }
+            list.push_back(pair);
+          }
+        }
+      }
+    }
+    std::sort(list.begin(), list.end(), [](const NeighborPair& a, const NeighborPair& b) {
+      return std::tie(a.j, a.key_shift) < std::tie(b.j, b.key_shift);
+    });
+  }
+
+  // Concatenate in particle order, then index the pairs by particle for the force sum.
+  pairs_.clear();
+  for (int i = 0; i < n; ++i)
+    pairs_.insert(pairs_.end(), per_particle_[i].begin(), per_particle_[i].end());
+  incident_start_.assign(n + 1, 0);
+  for (const NeighborPair& pair : pairs_) {
+    ++incident_start_[pair.i + 1];
+    ++incident_start_[pair.j + 1];
+  }
+  for (int p = 0; p < n; ++p) incident_start_[p + 1] += incident_start_[p];
+  incident_pairs_.resize(incident_start_[n]);
+  incident_is_i_.resize(incident_start_[n]);
+  std::vector<std::int64_t> fill(incident_start_.begin(), incident_start_.end() - 1);
+  for (int k = 0; k < static_cast<int>(pairs_.size()); ++k) {
+    const std::int64_t slot_i = fill[pairs_[k].i]++;
+    incident_pairs_[slot_i] = k;
+    incident_is_i_[slot_i] = 1;
+    const std::int64_t slot_j = fill[pairs_[k].j]++;
+    incident_pairs_[slot_j] = k;
+    incident_is_i_[slot_j] = 0;
+  }
+  position_at_build_m_ = particles.position_m;
+  built_ = true;
+}
+
+bool NeighborList::NeedsRebuild(const Particles& particles, int threads) const {
+  if (!built_ || position_at_build_m_.size() != particles.size()) return true;
+  const int n = static_cast<int>(particles.size());
+  const double limit_sq = 0.25 * skin_m_ * skin_m_;
+  int moved = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved) num_threads(threads)
+  for (int p = 0; p < n; ++p) {
+    if ((particles.position_m[p] - position_at_build_m_[p]).squaredNorm() > limit_sq) moved = 1;
+  }
+  return moved != 0;
+}
+
+}  // namespace gonogo::dem
