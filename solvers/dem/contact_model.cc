@@ -170,6 +170,7 @@ ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
   if (f_t_magnitude > f_t_limit) {
     f_t *= (f_t_magnitude > 0.0 ? f_t_limit / f_t_magnitude : 0.0);
     xi = k_t > 0.0 ? Vec3(-(f_t + gamma_t * v_t) / k_t) : Vec3::Zero();
+    result.sliding = true;
   }
   result.tangential_stiffness_n_m = k_t;
 

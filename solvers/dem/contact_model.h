@@ -57,6 +57,7 @@ struct ContactResult {
   double normal_force_n = 0.0;  // elastic + damping, along `normal`
   double normal_stiffness_n_m = 0.0;
   double tangential_stiffness_n_m = 0.0;
+  bool sliding = false;  // the tangential force is at the Coulomb limit
 };
 
 struct NormalResponse {

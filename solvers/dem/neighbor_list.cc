@@ -13,36 +13,53 @@ void Box::Validate() const {
   Require((hi_m - lo_m).minCoeff() > 0.0, "box", "hi_m must exceed lo_m on every axis");
 }
 
-void NeighborList::BinParticles(const Particles& particles, const Box& box, double cell_size_m) {
-  const Vec3 length = box.LengthM();
+Cell Cell::FromBox(const Box& box) {
+  Cell cell;
+  cell.origin_m = box.lo_m;
+  cell.edges_m = box.LengthM().asDiagonal();
+  cell.periodic = box.periodic;
+  return cell;
+}
+
+Vec3 Cell::FaceSpacingM() const {
+  const Eigen::Matrix3d inverse = edges_m.inverse();
+  return Vec3(1.0 / inverse.row(0).norm(), 1.0 / inverse.row(1).norm(),
+              1.0 / inverse.row(2).norm());
+}
+
+void NeighborList::BinParticles(const Particles& particles, const Cell& cell, double cell_size_m) {
+  const Vec3 spacing = cell.FaceSpacingM();
   const int n = static_cast<int>(particles.size());
   // A sparse cloud in a large open box would need more cells than grains: coarsen the grid so
   // that there are at most about 8 cells per grain (cells only need to be at least the cutoff).
   const double max_cells = std::max(64.0, 8.0 * n);
-  const double fine_cells = (length / cell_size_m).array().floor().max(1.0).prod();
+  const double fine_cells = (spacing / cell_size_m).array().floor().max(1.0).prod();
   if (fine_cells > max_cells) cell_size_m *= std::cbrt(fine_cells / max_cells);
   int cells = 1;
   for (int d = 0; d < 3; ++d) {
-    cell_count_[d] = std::max(1, static_cast<int>(std::floor(length[d] / cell_size_m)));
-    if (box.periodic[d]) {
+    // Bins are slabs of fractional width 1 / count; each is at least cell_size_m thick in space,
+    // so the 27 surrounding bins hold every grain within the cutoff, however the cell is sheared.
+    cell_count_[d] = std::max(1, static_cast<int>(std::floor(spacing[d] / cell_size_m)));
+    if (cell.periodic[d]) {
       Require(cell_count_[d] >= 3, "box",
-              "a periodic length must be at least 3 (2 r_max + skin) for the minimum image");
+              "a periodic cell must be at least 3 (2 r_max + skin) thick on every axis for the "
+              "minimum image");
     }
-    cell_size_m_[d] = length[d] / cell_count_[d];
     cells *= cell_count_[d];
   }
+  to_fraction_ = cell.edges_m.inverse();
   cell_of_particle_.resize(n);
   cell_start_.assign(cells + 1, 0);
   for (int p = 0; p < n; ++p) {
+    const Vec3 fraction = to_fraction_ * (particles.position_m[p] - cell.origin_m);
     int index[3];
     for (int d = 0; d < 3; ++d) {
-      const int c = static_cast<int>(
-          std::floor((particles.position_m[p][d] - box.lo_m[d]) / cell_size_m_[d]));
+      const int c = static_cast<int>(std::floor(fraction[d] * cell_count_[d]));
       index[d] = std::clamp(c, 0, cell_count_[d] - 1);  // open axes: outliers in edge cells
     }
-    const int cell = (index[2] * cell_count_[1] + index[1]) * cell_count_[0] + index[0];
-    cell_of_particle_[p] = cell;
-    ++cell_start_[cell + 1];
+    const int bin = (index[2] * cell_count_[1] + index[1]) * cell_count_[0] + index[0];
+    cell_of_particle_[p] = bin;
+    ++cell_start_[bin + 1];
   }
   for (int c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
   // Counting sort keeps particle indices ascending inside a cell.
@@ -51,35 +68,35 @@ void NeighborList::BinParticles(const Particles& particles, const Box& box, doub
   for (int p = 0; p < n; ++p) cell_particles_[fill[cell_of_particle_[p]]++] = p;
 }
 
-void NeighborList::Build(const Particles& particles, const Box& box, double skin_m, int threads) {
+void NeighborList::Build(const Particles& particles, const Cell& cell, double skin_m, int threads) {
   const int n = static_cast<int>(particles.size());
   double max_radius_m = 0.0;
   for (double r : particles.radius_m) max_radius_m = std::max(max_radius_m, r);
   skin_m_ = skin_m;
-  BinParticles(particles, box, 2.0 * max_radius_m + skin_m);
-  const Vec3 length = box.LengthM();
+  max_radius_m_ = max_radius_m;
+  BinParticles(particles, cell, 2.0 * max_radius_m + skin_m);
   per_particle_.resize(n);
 
-  // Each particle i lists the j > i within reach from the 27 surrounding cells.
+  // Each particle i lists the j > i within reach from the 27 surrounding bins.
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int i = 0; i < n; ++i) {
     std::vector<NeighborPair>& list = per_particle_[i];
     list.clear();
-    const int cell = cell_of_particle_[i];
-    const int home[3] = {cell % cell_count_[0], (cell / cell_count_[0]) % cell_count_[1],
-                         cell / (cell_count_[0] * cell_count_[1])};
+    const int bin = cell_of_particle_[i];
+    const int home[3] = {bin % cell_count_[0], (bin / cell_count_[0]) % cell_count_[1],
+                         bin / (cell_count_[0] * cell_count_[1])};
     for (int dz = -1; dz <= 1; ++dz) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const int offset[3] = {dx, dy, dz};
           int index[3];
-          std::array<int, 3> wrap = {0, 0, 0};
+          std::array<int, 3> wrap = {0, 0, 0};  // j's image: + wrap cell edges
           bool skip = false;
           for (int d = 0; d < 3 && !skip; ++d) {
             index[d] = home[d] + offset[d];
             if (cell_count_[d] == 1 && offset[d] != 0) skip = true;
             if (index[d] < 0 || index[d] >= cell_count_[d]) {
-              if (!box.periodic[d]) {
+              if (!cell.periodic[d]) {
                 skip = true;
               } else {
                 wrap[d] = index[d] < 0 ? -1 : 1;
@@ -92,24 +109,18 @@ void NeighborList::Build(const Particles& particles, const Box& box, double skin
           for (int k = cell_start_[other]; k < cell_start_[other + 1]; ++k) {
             const int j = cell_particles_[k];
             if (j <= i) continue;
-            // Image of j nearest to i: minimum image on periodic axes.
-            Vec3 shift = Vec3::Zero();
-            std::array<int, 3> image_shift = {0, 0, 0};
-            for (int d = 0; d < 3; ++d) {
-              if (!box.periodic[d]) continue;
-              const double delta = particles.position_m[j][d] - particles.position_m[i][d];
-              image_shift[d] = -static_cast<int>(std::lround(delta / length[d]));
-              shift[d] = image_shift[d] * length[d];
-            }
+            // With at least 3 bins per periodic axis each (j, image) is met once, through the
+            // bin that holds it, so the stencil's wrap is the image.
+            const Vec3 shift = cell.edges_m * Vec3(wrap[0], wrap[1], wrap[2]);
             const Vec3 separation = particles.position_m[j] + shift - particles.position_m[i];
             const double reach = particles.radius_m[i] + particles.radius_m[j] + skin_m;
             if (separation.squaredNorm() >= reach * reach) continue;
             NeighborPair pair;
             pair.i = i;
             pair.j = j;
-            pair.shift_m = shift;
+            pair.image = wrap;
             for (int d = 0; d < 3; ++d) {
-              pair.key_shift[d] = image_shift[d] + particles.image[i][d] - particles.image[j][d];
+              pair.key_shift[d] = wrap[d] + particles.image[i][d] - particles.image[j][d];
             }
             list.push_back(pair);
           }
@@ -143,17 +154,35 @@ void NeighborList::Build(const Particles& particles, const Box& box, double skin
     incident_is_i_[slot_j] = 0;
   }
   position_at_build_m_ = particles.position_m;
+  cell_at_build_ = cell;
   built_ = true;
 }
 
-bool NeighborList::NeedsRebuild(const Particles& particles, int threads) const {
+bool NeighborList::NeedsRebuild(const Particles& particles, const Cell& cell,
+                                int threads) const {
   if (!built_ || position_at_build_m_.size() != particles.size()) return true;
   const int n = static_cast<int>(particles.size());
-  const double limit_sq = 0.25 * skin_m_ * skin_m_;
+  if (cell.edges_m == cell_at_build_.edges_m && cell.origin_m == cell_at_build_.origin_m) {
+    const double limit_sq = 0.25 * skin_m_ * skin_m_;
+    int moved = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved) num_threads(threads)
+    for (int p = 0; p < n; ++p) {
+      if ((particles.position_m[p] - position_at_build_m_[p]).squaredNorm() > limit_sq) moved = 1;
+    }
+    return moved != 0;
+  }
+  // Deformed cell: a separation r at the build is now (1 + E) r + (u_i - u_j), with E the cell's
+  // stretch since the build and u the displacements relative to the affinely deformed cell.
+  const Eigen::Matrix3d stretch = cell.edges_m * cell_at_build_.edges_m.inverse();
+  const double strain = (stretch - Eigen::Matrix3d::Identity()).norm();
+  const double budget_m = skin_m_ - strain * (2.0 * max_radius_m_ + skin_m_);
+  if (budget_m <= 0.0) return true;
+  const double limit_sq = 0.25 * budget_m * budget_m;
   int moved = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved) num_threads(threads)
   for (int p = 0; p < n; ++p) {
-    if ((particles.position_m[p] - position_at_build_m_[p]).squaredNorm() > limit_sq) moved = 1;
+    const Vec3 affine_m = cell.origin_m + stretch * (position_at_build_m_[p] - cell_at_build_.origin_m);
+    if ((particles.position_m[p] - affine_m).squaredNorm() > limit_sq) moved = 1;
   }
   return moved != 0;
 }

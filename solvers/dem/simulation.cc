@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "solvers/common/errors.h"
+#include "solvers/dem/byte_stream.h"
 
 namespace gonogo::dem {
 
@@ -50,25 +51,40 @@ Simulation::Simulation(const SimulationParams& params, Particles particles, Cont
                      ? params_.time_step_s
                      : params_.time_step_safety * RayleighTimeStepS(min_radius_m, params_.material);
   wall_history_.assign(particles_.size() * params_.walls.size(), ContactHistory{});
+  cell_ = Cell::FromBox(params_.box);
+}
+
+void Simulation::SetVelocityGradient(const Eigen::Matrix3d& velocity_gradient_1_s) {
+  Require(velocity_gradient_1_s.allFinite(), "velocity_gradient_1_s", "must be finite");
+  const bool deforming = !velocity_gradient_1_s.isZero(0.0);
+  if (deforming) {
+    Require(cell_.periodic[0] && cell_.periodic[1] && cell_.periodic[2] && params_.walls.empty(),
+            "velocity_gradient_1_s", "a deforming cell must be periodic on every axis, with no walls");
+  }
+  velocity_gradient_1_s_ = velocity_gradient_1_s;
+  deforming_ = deforming;
 }
 
 void Simulation::Rebuild() {
-  // Wrap positions into periodic axes and count the box lengths crossed.
-  const Vec3 length = params_.box.LengthM();
+  // Wrap positions into the cell (fractional coordinates in [0, 1) on periodic axes) and count
+  // the cell edges crossed.
+  const Eigen::Matrix3d to_fraction = cell_.edges_m.inverse();
   for (std::size_t p = 0; p < particles_.size(); ++p) {
+    const Vec3 fraction = to_fraction * (particles_.position_m[p] - cell_.origin_m);
+    Vec3 crossed_edges = Vec3::Zero();
     for (int d = 0; d < 3; ++d) {
-      if (!params_.box.periodic[d]) continue;
-      const int crossed = static_cast<int>(
-          std::floor((particles_.position_m[p][d] - params_.box.lo_m[d]) / length[d]));
-      particles_.position_m[p][d] -= crossed * length[d];
+      if (!cell_.periodic[d]) continue;
+      const int crossed = static_cast<int>(std::floor(fraction[d]));
+      crossed_edges[d] = crossed;
       particles_.image[p][d] += crossed;
     }
+    if (!crossed_edges.isZero(0.0)) particles_.position_m[p] -= cell_.edges_m * crossed_edges;
   }
   const std::vector<NeighborPair> old_pairs = neighbors_.pairs();
   std::vector<ContactHistory> old_history = std::move(pair_history_);
   const double max_radius_m =
       *std::max_element(particles_.radius_m.begin(), particles_.radius_m.end());
-  neighbors_.Build(particles_, params_.box, params_.skin_fraction * max_radius_m, params_.threads);
+  neighbors_.Build(particles_, cell_, params_.skin_fraction * max_radius_m, params_.threads);
   ++rebuild_count_;
 
   // Carry history: both lists are sorted by (i, j, key_shift), so one merge pass finds matches.
@@ -85,6 +101,8 @@ void Simulation::Rebuild() {
   pair_force_on_i_n_.assign(pairs.size(), Vec3::Zero());
   pair_torque_i_n_m_.assign(pairs.size(), Vec3::Zero());
   pair_torque_j_n_m_.assign(pairs.size(), Vec3::Zero());
+  pair_normal_stiffness_n_m_.assign(pairs.size(), 0.0);
+  pair_tangential_stiffness_n_m_.assign(pairs.size(), 0.0);
 }
 
 void Simulation::ComputePairForces() {
@@ -96,7 +114,7 @@ void Simulation::ComputePairForces() {
   for (int k = 0; k < pair_count; ++k) {
     const int i = pairs[k].i;
     const int j = pairs[k].j;
-    const Vec3 separation = g.position_m[i] - (g.position_m[j] + pairs[k].shift_m);
+    const Vec3 separation = g.position_m[i] - (g.position_m[j] + pairs[k].ShiftM(cell_.edges_m));
     const double distance_m = separation.norm();
     const double overlap_m = g.radius_m[i] + g.radius_m[j] - distance_m;
     pair_overlap_m_[k] = std::max(overlap_m, 0.0);
@@ -106,6 +124,8 @@ void Simulation::ComputePairForces() {
       pair_force_on_i_n_[k].setZero();
       pair_torque_i_n_m_[k].setZero();
       pair_torque_j_n_m_[k].setZero();
+      pair_normal_stiffness_n_m_[k] = 0.0;
+      pair_tangential_stiffness_n_m_[k] = 0.0;
       continue;
     }
     ContactKinematics kin;
@@ -121,8 +141,12 @@ void Simulation::ComputePairForces() {
         g.velocity_m_s[i] - g.velocity_m_s[j] -
         (kin.arm_i_m * g.angular_velocity_rad_s[i] + kin.arm_j_m * g.angular_velocity_rad_s[j])
             .cross(kin.normal);
+    // In a deforming cell the images move apart with the affine field as well.
+    if (deforming_) kin.contact_velocity_m_s += velocity_gradient_1_s_ * separation;
     kin.relative_spin_rad_s = g.angular_velocity_rad_s[i] - g.angular_velocity_rad_s[j];
     const ContactResult result = model_.Evaluate(kin, time_step_s_, pair_history_[k]);
+    pair_normal_stiffness_n_m_[k] = result.normal_stiffness_n_m;
+    pair_tangential_stiffness_n_m_[k] = result.sliding ? 0.0 : result.tangential_stiffness_n_m;
     pair_force_on_i_n_[k] = result.force_on_i_n;
     pair_torque_i_n_m_[k] = result.torque_on_i_n_m;
     pair_torque_j_n_m_[k] = result.torque_on_j_n_m;
@@ -182,7 +206,7 @@ void Simulation::SumParticleForces() {
 }
 
 void Simulation::ComputeForces() {
-  if (neighbors_.NeedsRebuild(particles_, params_.threads)) Rebuild();
+  if (neighbors_.NeedsRebuild(particles_, cell_, params_.threads)) Rebuild();
   ComputePairForces();
   SumParticleForces();
   forces_valid_ = true;
@@ -203,8 +227,22 @@ void Simulation::Step() {
   if (!forces_valid_) ComputeForces();
   HalfKick();
   const int n = static_cast<int>(particles_.size());
+  if (deforming_) {
+    // Affine map of the cell and the grains by (I + dt L) about the cell's corner, then the
+    // fluctuating drift.
+    const Eigen::Matrix3d increment = time_step_s_ * velocity_gradient_1_s_;
+    cell_.edges_m += increment * cell_.edges_m;
 #pragma omp parallel for schedule(static) num_threads(params_.threads)
-  for (int p = 0; p < n; ++p) particles_.position_m[p] += time_step_s_ * particles_.velocity_m_s[p];
+    for (int p = 0; p < n; ++p) {
+      particles_.position_m[p] += increment * (particles_.position_m[p] - cell_.origin_m) +
+                                  time_step_s_ * particles_.velocity_m_s[p];
+    }
+  } else {
+#pragma omp parallel for schedule(static) num_threads(params_.threads)
+    for (int p = 0; p < n; ++p) {
+      particles_.position_m[p] += time_step_s_ * particles_.velocity_m_s[p];
+    }
+  }
   ComputeForces();
   HalfKick();
   time_s_ += time_step_s_;
@@ -218,6 +256,22 @@ int Simulation::ContactCount() const {
   int count = 0;
   for (double overlap : pair_overlap_m_) count += overlap > 0.0 ? 1 : 0;
   return count;
+}
+
+double Simulation::UnbalancedForceRatio() const {
+  double contact_sum_n = 0.0;
+  int contacts = 0;
+  for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
+    if (pair_overlap_m_[k] <= 0.0) continue;
+    contact_sum_n += pair_force_on_i_n_[k].norm();
+    ++contacts;
+  }
+  if (contacts == 0 || contact_sum_n == 0.0) return 0.0;
+  double net_sum_n = 0.0;
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    net_sum_n += (particles_.force_n[p] - particles_.mass_kg[p] * params_.gravity_m_s2).norm();
+  }
+  return (net_sum_n / particles_.size()) / (contact_sum_n / contacts);
 }
 
 double Simulation::KineticEnergyJ() const {
@@ -252,10 +306,8 @@ double Simulation::ElasticNormalEnergyJ() const {
 }
 
 Vec3 Simulation::UnwrappedPositionM(int p) const {
-  const Vec3 length = params_.box.LengthM();
-  Vec3 position = particles_.position_m[p];
-  for (int d = 0; d < 3; ++d) position[d] += particles_.image[p][d] * length[d];
-  return position;
+  const std::array<int, 3>& image = particles_.image[p];
+  return particles_.position_m[p] + cell_.edges_m * Vec3(image[0], image[1], image[2]);
 }
 
 Vec3 Simulation::LinearMomentumKgMS() const {
@@ -274,6 +326,203 @@ Vec3 Simulation::AngularMomentumKgM2S() const {
                 particles_.angular_velocity_rad_s[p] / particles_.inverse_inertia_1_kg_m2[p];
   }
   return momentum;
+}
+
+Eigen::Matrix3d Simulation::ContactVirialNM() const {
+  Eigen::Matrix3d virial = Eigen::Matrix3d::Zero();
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
+    if (pair_overlap_m_[k] <= 0.0) continue;
+    const Vec3 branch = particles_.position_m[pairs[k].i] -
+                        (particles_.position_m[pairs[k].j] + pairs[k].ShiftM(cell_.edges_m));
+    virial += branch * pair_force_on_i_n_[k].transpose();
+  }
+  return virial;
+}
+
+Eigen::Matrix<double, 6, 6> Simulation::ContactStiffnessVoigtNM() const {
+  // Voigt index -> tensor indices, xx yy zz yz xz xy.
+  static constexpr int kFirst[6] = {0, 1, 2, 1, 0, 0};
+  static constexpr int kSecond[6] = {0, 1, 2, 2, 2, 1};
+  Eigen::Matrix<double, 6, 6> stiffness = Eigen::Matrix<double, 6, 6>::Zero();
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
+    if (pair_overlap_m_[k] <= 0.0) continue;
+    const Vec3 branch = particles_.position_m[pairs[k].i] -
+                        (particles_.position_m[pairs[k].j] + pairs[k].ShiftM(cell_.edges_m));
+    const Vec3 normal = branch.normalized();
+    const double k_n = pair_normal_stiffness_n_m_[k];
+    const double k_t = pair_tangential_stiffness_n_m_[k];
+    // C_ijkl = k_n n_i d_j n_k d_l + k_t (delta_ik - n_i n_k) d_j d_l, symmetrised in (ij) and
+    // (kl) so it maps symmetric strain to symmetric stress.
+    auto component = [&](int i, int j, int a, int b) {
+      const double delta = i == a ? 1.0 : 0.0;
+      return k_n * normal[i] * branch[j] * normal[a] * branch[b] +
+             k_t * (delta - normal[i] * normal[a]) * branch[j] * branch[b];
+    };
+    for (int row = 0; row < 6; ++row) {
+      const int i = kFirst[row], j = kSecond[row];
+      for (int col = 0; col < 6; ++col) {
+        const int a = kFirst[col], b = kSecond[col];
+        // A shear column multiplies gamma_ab = 2 eps_ab, which carries both eps_ab and eps_ba,
+        // so the symmetrised component is the Voigt entry for every column.
+        stiffness(row, col) += 0.25 * (component(i, j, a, b) + component(j, i, a, b) +
+                                       component(i, j, b, a) + component(j, i, b, a));
+      }
+    }
+  }
+  return stiffness;
+}
+
+namespace {
+constexpr char kStateTag[9] = "GNGDEM01";
+
+void PutHistory(ByteWriter& out, const ContactHistory& history) {
+  out.Put(history.tangential_displacement_m);
+  out.Put(history.rolling_angle_rad);
+}
+void GetHistory(ByteReader& in, ContactHistory& history) {
+  in.Get(history.tangential_displacement_m);
+  in.Get(history.rolling_angle_rad);
+}
+}  // namespace
+
+std::string Simulation::SaveState() const {
+  ByteWriter out;
+  out.PutTag(kStateTag);
+  out.Put(static_cast<std::uint32_t>(0x01020304));  // byte-order check
+  const std::uint64_t n = particles_.size();
+  out.Put(n);
+  out.Put(time_s_);
+  out.Put(time_step_s_);
+  out.Put(static_cast<std::int32_t>(rebuild_count_));
+  out.Put(cell_.origin_m);
+  out.Put(cell_.edges_m);
+  out.Put(velocity_gradient_1_s_);
+  out.PutVector(particles_.position_m);
+  out.PutVector(particles_.velocity_m_s);
+  out.PutVector(particles_.angular_velocity_rad_s);
+  out.PutVector(particles_.force_n);
+  out.PutVector(particles_.torque_n_m);
+  out.PutVector(particles_.radius_m);
+  out.PutVector(particles_.mass_kg);
+  out.PutVector(particles_.inverse_inertia_1_kg_m2);
+  out.PutVector(particles_.image);
+  out.Put(static_cast<std::uint8_t>(forces_valid_ && neighbors_.built()));
+  if (forces_valid_ && neighbors_.built()) {
+    // The list is rebuilt from what its last build saw; the per-pair state follows it.
+    out.PutVector(neighbors_.position_at_build_m());
+    out.Put(neighbors_.cell_at_build().edges_m);
+    out.Put(static_cast<std::uint64_t>(pair_history_.size()));
+    for (std::size_t k = 0; k < pair_history_.size(); ++k) {
+      // Open pairs carry nothing; only contacts (and pairs with history) are written.
+      const bool active = pair_overlap_m_[k] > 0.0;
+      out.Put(static_cast<std::uint8_t>(active));
+      if (!active) continue;
+      PutHistory(out, pair_history_[k]);
+      out.Put(pair_overlap_m_[k]);
+      out.Put(pair_force_on_i_n_[k]);
+      out.Put(pair_torque_i_n_m_[k]);
+      out.Put(pair_torque_j_n_m_[k]);
+      out.Put(pair_normal_stiffness_n_m_[k]);
+      out.Put(pair_tangential_stiffness_n_m_[k]);
+    }
+    out.Put(static_cast<std::uint64_t>(wall_history_.size()));
+    for (const ContactHistory& history : wall_history_) PutHistory(out, history);
+  }
+  return out.Take();
+}
+
+void Simulation::RestoreState(const std::string& bytes) {
+  ByteReader in(bytes);
+  in.ExpectTag(kStateTag);
+  std::uint32_t order = 0;
+  in.Get(order);
+  Require(order == 0x01020304, "state", "saved on a machine of the other byte order");
+  std::uint64_t n = 0;
+  in.Get(n);
+  Require(n > 0 && n < (1ull << 31), "state", "grain count out of range");
+  Particles restored;
+  double time_s = 0.0, time_step_s = 0.0;
+  std::int32_t rebuild_count = 0;
+  Cell cell = Cell::FromBox(params_.box);
+  Eigen::Matrix3d velocity_gradient_1_s;
+  in.Get(time_s);
+  in.Get(time_step_s);
+  in.Get(rebuild_count);
+  in.Get(cell.origin_m);
+  in.Get(cell.edges_m);
+  in.Get(velocity_gradient_1_s);
+  in.GetVector(restored.position_m, n);
+  in.GetVector(restored.velocity_m_s, n);
+  in.GetVector(restored.angular_velocity_rad_s, n);
+  in.GetVector(restored.force_n, n);
+  in.GetVector(restored.torque_n_m, n);
+  in.GetVector(restored.radius_m, n);
+  in.GetVector(restored.mass_kg, n);
+  in.GetVector(restored.inverse_inertia_1_kg_m2, n);
+  in.GetVector(restored.image, n);
+  std::uint8_t has_contacts = 0;
+  in.Get(has_contacts);
+  NeighborList neighbors;
+  std::vector<ContactHistory> pair_history;
+  std::vector<double> overlap, k_n, k_t;
+  std::vector<Vec3> force, torque_i, torque_j;
+  std::vector<ContactHistory> wall_history(n * params_.walls.size());
+  if (has_contacts) {
+    Particles at_build = restored;
+    in.GetVector(at_build.position_m, n);
+    Cell cell_at_build = cell;
+    in.Get(cell_at_build.edges_m);
+    const double max_radius_m = *std::max_element(restored.radius_m.begin(), restored.radius_m.end());
+    neighbors.Build(at_build, cell_at_build, params_.skin_fraction * max_radius_m, params_.threads);
+    std::uint64_t pair_count = 0;
+    in.Get(pair_count);
+    Require(pair_count == neighbors.pairs().size(), "state",
+            "the saved contacts do not match the rebuilt neighbour list (different parameters?)");
+    pair_history.assign(pair_count, ContactHistory{});
+    overlap.assign(pair_count, 0.0);
+    k_n.assign(pair_count, 0.0);
+    k_t.assign(pair_count, 0.0);
+    force.assign(pair_count, Vec3::Zero());
+    torque_i.assign(pair_count, Vec3::Zero());
+    torque_j.assign(pair_count, Vec3::Zero());
+    for (std::uint64_t k = 0; k < pair_count; ++k) {
+      std::uint8_t active = 0;
+      in.Get(active);
+      if (!active) continue;
+      GetHistory(in, pair_history[k]);
+      in.Get(overlap[k]);
+      in.Get(force[k]);
+      in.Get(torque_i[k]);
+      in.Get(torque_j[k]);
+      in.Get(k_n[k]);
+      in.Get(k_t[k]);
+    }
+    std::uint64_t wall_count = 0;
+    in.Get(wall_count);
+    Require(wall_count == wall_history.size(), "state", "wall count does not match the parameters");
+    for (ContactHistory& history : wall_history) GetHistory(in, history);
+  }
+  Require(in.AtEnd(), "state", "trailing bytes after the saved state");
+
+  // Everything read: commit.
+  particles_ = std::move(restored);
+  time_s_ = time_s;
+  time_step_s_ = time_step_s;
+  rebuild_count_ = rebuild_count;
+  cell_ = cell;
+  neighbors_ = std::move(neighbors);
+  pair_history_ = std::move(pair_history);
+  pair_overlap_m_ = std::move(overlap);
+  pair_force_on_i_n_ = std::move(force);
+  pair_torque_i_n_m_ = std::move(torque_i);
+  pair_torque_j_n_m_ = std::move(torque_j);
+  pair_normal_stiffness_n_m_ = std::move(k_n);
+  pair_tangential_stiffness_n_m_ = std::move(k_t);
+  wall_history_ = std::move(wall_history);
+  forces_valid_ = has_contacts != 0;
+  SetVelocityGradient(velocity_gradient_1_s);
 }
 
 }  // namespace gonogo::dem

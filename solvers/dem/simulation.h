@@ -1,7 +1,10 @@
 // Time integration of a sphere packing: velocity Verlet, linked-cell neighbours with a Verlet skin,
-// periodic or wall-bounded orthogonal box, gravity, OpenMP force loop with a fixed summation order.
+// periodic or wall-bounded orthogonal box that a periodic packing may deform (general homogeneous
+// deformation of the cell), gravity, OpenMP force loop with a fixed summation order.
 #pragma once
 
+#include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "solvers/dem/contact_model.h"
@@ -43,18 +46,44 @@ class Simulation {
   void Step();
   void Run(int steps);
 
+  // Deforms the cell at a constant velocity gradient L (1/s) from the next step on: each step maps
+  // the cell edges and the grains by (I + dt L), seed 000's X_{n+1} = X_n + dX_n spread over
+  // steps, and contact velocities include the affine part L (x_i - x_j). Velocities in
+  // particles() are relative to that affine field. Needs every axis periodic and no walls.
+  void SetVelocityGradient(const Eigen::Matrix3d& velocity_gradient_1_s);
+  const Eigen::Matrix3d& velocity_gradient_1_s() const { return velocity_gradient_1_s_; }
+  const Cell& cell() const { return cell_; }
+
+  // Contact virial W = sum over contacts of (x_i - x_j) (x) f_i (N m), from the last force
+  // evaluation (f_i the force on i, x_j the image in contact). A packing in equilibrium carries
+  // the Cauchy stress sigma = -W / V (tension positive; seed 000's (1/V) sum d (x) f with d from
+  // i to j).
+  Eigen::Matrix3d ContactVirialNM() const;
+  // sum over contacts of k_n n (x) d (x) n (x) d + k_t (I - n n) (x) d (x) d (seed 000's
+  // tangent, both tangent directions; k_t = 0 while sliding), as the 6 x 6 matrix of
+  // dsigma/deps in Voigt order xx yy zz yz xz xy with engineering shears, times V (N m).
+  Eigen::Matrix<double, 6, 6> ContactStiffnessVoigtNM() const;
+
+  // The whole state (grains, cell, contacts and their history, neighbour list inputs) as bytes.
+  // RestoreState on a Simulation built with the same parameters continues bit-identically.
+  std::string SaveState() const;
+  void RestoreState(const std::string& bytes);
+
   const Particles& particles() const { return particles_; }
   double time_step_s() const { return time_step_s_; }
   double time_s() const { return time_s_; }
   int rebuild_count() const { return rebuild_count_; }
   int ContactCount() const;
+  // Mean |net force| over grains / mean |contact force| over contacts (0 when there are none):
+  // the usual quasi-static equilibrium measure (e.g. Ng 2006; 1e-3 or below is static).
+  double UnbalancedForceRatio() const;
 
   double KineticEnergyJ() const;        // translational + rotational
   double ElasticNormalEnergyJ() const;  // sum of U(d_n) over contacts and walls
   Vec3 LinearMomentumKgMS() const;
   // About the origin, from unwrapped positions: sum m x (x) v + I omega.
   Vec3 AngularMomentumKgM2S() const;
-  // Position plus the box lengths crossed (continuous across periodic wraps).
+  // Position plus the cell edges crossed (continuous across periodic wraps).
   Vec3 UnwrappedPositionM(int p) const;
 
  private:
@@ -68,6 +97,9 @@ class Simulation {
   SimulationParams params_;
   Particles particles_;
   ContactModel model_;
+  Cell cell_;
+  Eigen::Matrix3d velocity_gradient_1_s_ = Eigen::Matrix3d::Zero();
+  bool deforming_ = false;
   NeighborList neighbors_;
   double time_step_s_ = 0.0;
   double time_s_ = 0.0;
@@ -79,6 +111,8 @@ class Simulation {
   std::vector<Vec3> pair_force_on_i_n_;
   std::vector<Vec3> pair_torque_i_n_m_;
   std::vector<Vec3> pair_torque_j_n_m_;
+  std::vector<double> pair_normal_stiffness_n_m_;
+  std::vector<double> pair_tangential_stiffness_n_m_;  // 0 while sliding
   std::vector<ContactHistory> wall_history_;  // (N x walls)
 };
 

@@ -1,0 +1,324 @@
+#include "solvers/dem/rve/rve.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "solvers/common/errors.h"
+#include "solvers/dem/byte_stream.h"
+
+namespace gonogo::dem::rve {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr char kRveTag[9] = "GNGRVE01";
+constexpr int kStiffnessRefreshSteps = 20;
+// Servo relaxation time in steps: each step closes 1/kServoSteps of the stress gap, judged with
+// the affine contact tangent (stiffer than the relaxed packing, so the servo errs on the slow,
+// stable side).
+constexpr double kServoSteps = 15.0;
+constexpr double kServoFloorStiffnessPa = 1e5;  // a gas has no contact stiffness
+constexpr double kEquilibriumRatio = 5e-3;      // unbalanced-force ratio of a settled packing
+constexpr double kPressureTolerance = 0.01;
+constexpr int kConsolidationStepBudget = 400000;
+
+SimulationParams SimulationParamsFor(const RveParams& params, const MaterialParams& material,
+                                     double side_m, double time_step_s) {
+  SimulationParams simulation;
+  simulation.material = material;
+  simulation.box.lo_m = Vec3::Zero();
+  simulation.box.hi_m = Vec3::Constant(side_m);
+  simulation.box.periodic = {true, true, true};
+  simulation.time_step_s = time_step_s;
+  simulation.time_step_safety = params.time_step_safety;
+  simulation.threads = params.threads;
+  return simulation;
+}
+
+double MeanPressurePa(const Matrix3& stress_pa) { return -stress_pa.trace() / 3.0; }
+
+// Periodic distance between two points of a cubic cell of side L.
+double PeriodicDistanceM(const Vec3& a, const Vec3& b, double side_m) {
+  Vec3 delta = a - b;
+  for (int d = 0; d < 3; ++d) delta[d] -= side_m * std::round(delta[d] / side_m);
+  return delta.norm();
+}
+
+void PutParams(ByteWriter& out, const RveParams& p) {
+  const MaterialParams& m = p.material;
+  for (double v : {m.youngs_modulus_pa, m.poisson_ratio, m.density_kg_m3, m.friction,
+                   m.rolling_stiffness, m.rolling_limit, m.restitution, p.mean_radius_m,
+                   p.radius_spread, p.initial_solid_fraction, p.consolidation_pressure_pa,
+                   p.consolidation_friction, p.time_step_safety, p.max_inertial_number}) {
+    out.Put(v);
+  }
+  out.Put(static_cast<std::int32_t>(p.grain_count));
+  out.Put(static_cast<std::uint32_t>(p.seed));
+  out.Put(static_cast<std::int32_t>(p.threads));
+}
+
+void GetParams(ByteReader& in, RveParams& p) {
+  MaterialParams& m = p.material;
+  for (double* v : {&m.youngs_modulus_pa, &m.poisson_ratio, &m.density_kg_m3, &m.friction,
+                    &m.rolling_stiffness, &m.rolling_limit, &m.restitution, &p.mean_radius_m,
+                    &p.radius_spread, &p.initial_solid_fraction, &p.consolidation_pressure_pa,
+                    &p.consolidation_friction, &p.time_step_safety, &p.max_inertial_number}) {
+    in.Get(*v);
+  }
+  std::int32_t grains = 0, threads = 0;
+  std::uint32_t seed = 0;
+  in.Get(grains);
+  in.Get(seed);
+  in.Get(threads);
+  p.grain_count = grains;
+  p.seed = seed;
+  p.threads = threads;
+}
+}  // namespace
+
+MaterialParams RveParams::SeedMaterial() {
+  MaterialParams material;  // E, nu, mu, beta, eta of seed 000
+  material.restitution = 0.5;
+  return material;
+}
+
+void RveParams::Validate() const {
+  material.Validate();
+  Require(grain_count >= 20, "grain_count", "must be at least 20");
+  Require(std::isfinite(mean_radius_m) && mean_radius_m > 0.0, "mean_radius_m", "must be positive");
+  Require(radius_spread >= 0.0 && radius_spread <= 0.5, "radius_spread", "must be in [0, 0.5]");
+  Require(initial_solid_fraction > 0.0 && initial_solid_fraction <= 0.4, "initial_solid_fraction",
+          "must be in (0, 0.4] (random placement)");
+  Require(std::isfinite(consolidation_pressure_pa) && consolidation_pressure_pa > 0.0,
+          "consolidation_pressure_pa", "must be positive");
+  Require(std::isfinite(consolidation_friction) && consolidation_friction >= 0.0,
+          "consolidation_friction", "must be >= 0");
+  Require(time_step_safety > 0.0 && time_step_safety <= 1.0, "time_step_safety",
+          "must be in (0, 1]");
+  Require(std::isfinite(max_inertial_number) && max_inertial_number > 0.0 &&
+              max_inertial_number <= 0.1,
+          "max_inertial_number", "must be in (0, 0.1]");
+  Require(threads >= 1, "threads", "must be >= 1");
+}
+
+Rve::Rve(const RveParams& params, std::unique_ptr<Simulation> simulation)
+    : params_(params), simulation_(std::move(simulation)) {}
+
+Rve::Rve(const Rve& other)
+    : params_(other.params_),
+      simulation_(std::make_unique<Simulation>(*other.simulation_)),
+      strain_(other.strain_),
+      servo_stiffness_pa_(other.servo_stiffness_pa_),
+      steps_since_stiffness_(other.steps_since_stiffness_) {}
+
+Rve& Rve::operator=(const Rve& other) {
+  if (this != &other) *this = Rve(other);
+  return *this;
+}
+
+Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& progress) {
+  params.Validate();
+  // Radii uniform in r_mean (1 +- spread); grains placed at random without overlap in a cube
+  // holding the requested solid fraction.
+  std::mt19937_64 random(params.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<double> radii(params.grain_count);
+  double solid_volume_m3 = 0.0;
+  for (double& r : radii) {
+    r = params.mean_radius_m * (1.0 + params.radius_spread * (2.0 * unit(random) - 1.0));
+    solid_volume_m3 += 4.0 / 3.0 * kPi * r * r * r;
+  }
+  // Largest first, so the hard placements happen while the cell is empty.
+  std::sort(radii.begin(), radii.end(), std::greater<double>());
+  const double side_m = std::cbrt(solid_volume_m3 / params.initial_solid_fraction);
+  MaterialParams consolidation_material = params.material;
+  consolidation_material.friction = params.consolidation_friction;
+  Particles grains;
+  for (double r : radii) {
+    bool placed = false;
+    for (int attempt = 0; attempt < 100000 && !placed; ++attempt) {
+      const Vec3 candidate(side_m * unit(random), side_m * unit(random), side_m * unit(random));
+      placed = true;
+      for (std::size_t g = 0; g < grains.size() && placed; ++g) {
+        placed = PeriodicDistanceM(candidate, grains.position_m[g], side_m) >
+                 r + grains.radius_m[g];
+      }
+      if (placed) grains.Add(candidate, Vec3::Zero(), r, params.material.density_kg_m3);
+    }
+    if (!placed) {
+      throw LimitError("initial_solid_fraction",
+                       "random placement failed; lower the initial solid fraction");
+    }
+  }
+  auto simulation = std::make_unique<Simulation>(
+      SimulationParamsFor(params, consolidation_material, side_m, 0.0), std::move(grains));
+  Rve rve(params, std::move(simulation));
+
+  // Isotropic consolidation: every normal stress held at -p by the servo, no shear.
+  MixedControl isotropic;
+  for (int d = 0; d < 3; ++d) {
+    isotropic.stress_controlled[d][d] = true;
+    isotropic.target_stress_pa(d, d) = -params.consolidation_pressure_pa;
+  }
+  const double target_pa = params.consolidation_pressure_pa;
+  bool settled = false;
+  for (int step = 0; step < kConsolidationStepBudget && !settled; ++step) {
+    rve.ServoStep(isotropic);
+    if (step % 100 == 99) {
+      const double pressure_pa = MeanPressurePa(rve.StressPa());
+      settled = std::abs(pressure_pa - target_pa) < kPressureTolerance * target_pa &&
+                rve.simulation_->UnbalancedForceRatio() < kEquilibriumRatio;
+    }
+    if (progress && step % 1000 == 999) {
+      progress(std::min(1.0, std::max(0.0, MeanPressurePa(rve.StressPa()) / target_pa)));
+    }
+  }
+  if (!settled) {
+    throw LimitError("consolidation_pressure_pa",
+                     "isotropic consolidation did not settle within the step budget");
+  }
+  // Same grains, contacts and history under the loading material (its own friction).
+  auto loading = std::make_unique<Simulation>(
+      SimulationParamsFor(params, params.material, side_m, rve.time_step_s()),
+      Particles(rve.simulation_->particles()));
+  loading->RestoreState(rve.simulation_->SaveState());
+  loading->SetVelocityGradient(Matrix3::Zero());
+  Rve consolidated(params, std::move(loading));
+  return consolidated;
+}
+
+double Rve::StableRate1S() const {
+  const double pressure_pa = std::max(MeanPressurePa(StressPa()), params_.consolidation_pressure_pa);
+  // I = rate d sqrt(rho / p) (GDR MiDi 2004, Eur. Phys. J. E 14, 341).
+  return params_.max_inertial_number /
+         (2.0 * params_.mean_radius_m *
+          std::sqrt(params_.material.density_kg_m3 / pressure_pa));
+}
+
+void Rve::ServoStep(const MixedControl& control) {
+  if (++steps_since_stiffness_ >= kStiffnessRefreshSteps) {
+    servo_stiffness_pa_ = TangentPa();
+    steps_since_stiffness_ = 0;
+  }
+  static constexpr int kVoigt[3][3] = {{0, 5, 4}, {5, 1, 3}, {4, 3, 2}};
+  const Matrix3 stress_pa = StressPa();
+  const double dt_s = simulation_->time_step_s();
+  // A gas (no contact yet) may be compressed ten times faster: nothing inertial to disturb. A
+  // held stress may need its axis to move faster than the driven one (dilatancy), hence 3x.
+  const double rate_cap_1_s =
+      StableRate1S() * (simulation_->ContactCount() < params_.grain_count ? 10.0 : 3.0);
+  Matrix3 rate_1_s = control.strain_rate_1_s;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) {
+      if (!control.stress_controlled[i][j] && !control.stress_controlled[j][i]) continue;
+      const int v = kVoigt[i][j];
+      const double stiffness_pa = std::max(servo_stiffness_pa_(v, v), kServoFloorStiffnessPa);
+      const double gap_pa = control.target_stress_pa(i, j) - stress_pa(i, j);
+      // Normal: d(sigma_ii) = D L_ii dt. Shear: d(sigma_ij) = D (L_ij + L_ji) dt.
+      double rate = gap_pa / (stiffness_pa * kServoSteps * dt_s) * (i == j ? 1.0 : 0.5);
+      rate = std::clamp(rate, -rate_cap_1_s, rate_cap_1_s);
+      rate_1_s(i, j) = rate;
+      rate_1_s(j, i) = rate;
+    }
+  }
+  simulation_->SetVelocityGradient(rate_1_s);
+  simulation_->Step();
+  strain_ += 0.5 * (rate_1_s + rate_1_s.transpose()) * dt_s;
+}
+
+void Rve::Run(const MixedControl& control, int steps) {
+  Require(control.strain_rate_1_s.allFinite() && control.target_stress_pa.allFinite(), "control",
+          "rates and target stresses must be finite");
+  for (int s = 0; s < steps; ++s) ServoStep(control);
+  simulation_->SetVelocityGradient(Matrix3::Zero());
+}
+
+void Rve::ApplyIncrement(const Matrix3& displacement_gradient_increment, int min_steps,
+                         int relax_steps) {
+  Require(displacement_gradient_increment.allFinite(), "displacement_gradient_increment",
+          "must be finite");
+  const double dt_s = simulation_->time_step_s();
+  const double largest = 0.5 * (displacement_gradient_increment +
+                                displacement_gradient_increment.transpose())
+                                   .cwiseAbs()
+                                   .maxCoeff();
+  const int steps = std::max(
+      std::max(min_steps, 1), static_cast<int>(std::ceil(largest / (StableRate1S() * dt_s))));
+  const Matrix3 rate_1_s = displacement_gradient_increment / (steps * dt_s);
+  simulation_->SetVelocityGradient(rate_1_s);
+  for (int s = 0; s < steps; ++s) {
+    simulation_->Step();
+    strain_ += 0.5 * (rate_1_s + rate_1_s.transpose()) * dt_s;
+  }
+  simulation_->SetVelocityGradient(Matrix3::Zero());
+  simulation_->Run(relax_steps);
+}
+
+Matrix3 Rve::StressPa() const {
+  const Matrix3 stress = -simulation_->ContactVirialNM() / simulation_->cell().VolumeM3();
+  return 0.5 * (stress + stress.transpose());
+}
+
+Voigt6x6 Rve::TangentPa() const {
+  return simulation_->ContactStiffnessVoigtNM() / simulation_->cell().VolumeM3();
+}
+
+RveSnapshot Rve::Snapshot() const {
+  RveSnapshot snapshot;
+  snapshot.time_s = simulation_->time_s();
+  snapshot.strain = strain_;
+  snapshot.stress_pa = StressPa();
+  snapshot.volume_m3 = simulation_->cell().VolumeM3();
+  double solid_m3 = 0.0;
+  for (double r : simulation_->particles().radius_m) solid_m3 += 4.0 / 3.0 * kPi * r * r * r;
+  snapshot.solid_fraction = solid_m3 / snapshot.volume_m3;
+  snapshot.coordination_number =
+      2.0 * simulation_->ContactCount() / static_cast<double>(simulation_->particles().size());
+  snapshot.unbalanced_force_ratio = simulation_->UnbalancedForceRatio();
+  return snapshot;
+}
+
+std::string Rve::Save() const {
+  ByteWriter out;
+  out.PutTag(kRveTag);
+  PutParams(out, params_);
+  out.Put(strain_);
+  for (int k = 0; k < 36; ++k) out.Put(servo_stiffness_pa_.data()[k]);
+  out.Put(static_cast<std::int32_t>(steps_since_stiffness_));
+  out.PutBlob(simulation_->SaveState());
+  return out.Take();
+}
+
+Rve Rve::Restore(const std::string& bytes, int threads) {
+  ByteReader in(bytes);
+  in.ExpectTag(kRveTag);
+  RveParams params;
+  GetParams(in, params);
+  if (threads > 0) params.threads = threads;
+  params.Validate();
+  Matrix3 strain;
+  in.Get(strain);
+  Voigt6x6 servo_stiffness_pa;
+  for (int k = 0; k < 36; ++k) in.Get(servo_stiffness_pa.data()[k]);
+  std::int32_t steps_since_stiffness = 0;
+  in.Get(steps_since_stiffness);
+  std::string state;
+  in.GetBlob(state);
+  Require(in.AtEnd(), "state", "trailing bytes after the saved RVE");
+  // A placeholder grain; RestoreState replaces grains, cell and time step.
+  Particles placeholder;
+  placeholder.Add(Vec3::Zero(), Vec3::Zero(), params.mean_radius_m, params.material.density_kg_m3);
+  auto simulation = std::make_unique<Simulation>(
+      SimulationParamsFor(params, params.material, 100.0 * params.mean_radius_m, 0.0),
+      std::move(placeholder));
+  simulation->RestoreState(state);
+  Rve rve(params, std::move(simulation));
+  rve.strain_ = strain;
+  rve.servo_stiffness_pa_ = servo_stiffness_pa;
+  rve.steps_since_stiffness_ = steps_since_stiffness;
+  return rve;
+}
+
+}  // namespace gonogo::dem::rve

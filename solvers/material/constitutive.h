@@ -1,0 +1,70 @@
+// The scale-bridging seam (ARCHITECTURE section 4, the seeds' "VUMAT"): the finite-element solver
+// hands a batch of strain increments with their committed states down and gets Cauchy stresses,
+// optional tangents, new states and a status back. It never knows what answers at a point: a
+// return map, a periodic DE RVE or a network.
+//
+// Conventions for every model:
+// - Stress is Cauchy, in Pa, tension positive (soil-mechanics output flips the sign, not this
+//   seam).
+// - An increment is the displacement-gradient increment dH = d(du)/dx on the configuration at
+//   the start of the increment; its symmetric part is the strain increment, its skew part the
+//   rotation increment. A model that only needs small strain uses sym(dH).
+// - Tangents are 6 x 6 Voigt matrices dsigma/deps, order xx yy zz yz xz xy, engineering shear
+//   strains (gamma = 2 eps), in Pa.
+// - A committed state is never changed in place: on failure the response carries no new state,
+//   so the caller can cut the step and retry from the committed one.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gonogo::material {
+
+using Matrix3 = Eigen::Matrix3d;
+using Voigt6x6 = Eigen::Matrix<double, 6, 6>;
+
+// What a model keeps at one integration point between increments.
+class MaterialState {
+ public:
+  virtual ~MaterialState() = default;
+  virtual std::unique_ptr<MaterialState> Clone() const = 0;
+  // Compact bytes from which the model's RestoreState rebuilds the state (for checkpoints and for
+  // moving a point to another rank).
+  virtual std::string Serialize() const = 0;
+};
+
+enum class UpdateStatus {
+  kOk,
+  kFailed,  // no new state; `reason` says why (too large an increment, a cell too distorted ...)
+};
+
+struct PointIncrement {
+  Matrix3 displacement_gradient_increment = Matrix3::Zero();
+  const MaterialState* committed = nullptr;
+};
+
+struct PointResponse {
+  UpdateStatus status = UpdateStatus::kFailed;
+  std::string reason;
+  std::unique_ptr<MaterialState> state;  // set only when status is kOk
+  Matrix3 stress_pa = Matrix3::Zero();
+  bool has_tangent = false;
+  Voigt6x6 tangent_pa = Voigt6x6::Zero();
+};
+
+class ConstitutiveModel {
+ public:
+  virtual ~ConstitutiveModel() = default;
+  virtual std::string Name() const = 0;
+  // The state of a fresh point and its stress.
+  virtual std::unique_ptr<MaterialState> InitialState() const = 0;
+  virtual std::unique_ptr<MaterialState> RestoreState(const std::string& bytes) const = 0;
+  // One response per increment, in order. Points are independent, so a model may run them in
+  // parallel; the results do not depend on how the batch is split.
+  virtual std::vector<PointResponse> Update(const std::vector<PointIncrement>& increments,
+                                            bool want_tangent) const = 0;
+};
+
+}  // namespace gonogo::material
