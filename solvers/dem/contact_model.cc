@@ -10,6 +10,14 @@ namespace gonogo::dem {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+
+// x^e for x >= 0, with fast paths for the exponents EEPA is used with (1, 1.5, 2).
+double Power(double x, double e) {
+  if (e == 1.5) return x * std::sqrt(x);
+  if (e == 1.0) return x;
+  if (e == 2.0) return x * x;
+  return std::pow(x, e);
+}
 }  // namespace
 
 void MaterialParams::Validate() const {
@@ -39,8 +47,8 @@ HertzNormal::HertzNormal(const MaterialParams& material)
 NormalResponse HertzNormal::Evaluate(double overlap_m, double effective_radius_m) const {
   // F_n = 4/3 E* sqrt(r_e) d^{3/2}, k_n = 2 E* sqrt(r_e d) (Johnson 1985, sec. 4.2).
   const double sqrt_rd = std::sqrt(effective_radius_m * overlap_m);
-  return {4.0 / 3.0 * effective_modulus_pa_ * sqrt_rd * overlap_m,
-          2.0 * effective_modulus_pa_ * sqrt_rd};
+  const double stiffness_n_m = 2.0 * effective_modulus_pa_ * sqrt_rd;
+  return {4.0 / 3.0 * effective_modulus_pa_ * sqrt_rd * overlap_m, stiffness_n_m, stiffness_n_m};
 }
 
 double HertzNormal::ElasticEnergyJ(double overlap_m, double effective_radius_m) const {
@@ -111,6 +119,210 @@ Vec3 ElasticPlasticRolling::Torque(const ContactKinematics& kin, double normal_s
   return torque;
 }
 
+void EepaParams::Validate() const {
+  Require(std::isfinite(shear_modulus_pa) && shear_modulus_pa > 0.0, "shear_modulus_pa",
+          "must be positive");
+  Require(poisson_ratio >= 0.0 && poisson_ratio < 0.5, "poisson_ratio", "must be in [0, 0.5)");
+  Require(std::isfinite(density_kg_m3) && density_kg_m3 > 0.0, "density_kg_m3", "must be positive");
+  Require(restitution > 0.0 && restitution <= 1.0, "restitution", "must be in (0, 1]");
+  Require(friction >= 0.0 && std::isfinite(friction), "friction", "must be >= 0");
+  Require(rolling_friction >= 0.0 && std::isfinite(rolling_friction), "rolling_friction",
+          "must be >= 0");
+  Require(rolling_stiffness >= 0.0 && std::isfinite(rolling_stiffness), "rolling_stiffness",
+          "must be >= 0");
+  Require(pull_off_force_n <= 0.0 && std::isfinite(pull_off_force_n), "pull_off_force_n",
+          "must be <= 0 (an attraction, EDEM's sign)");
+  Require(surface_energy_j_m2 >= 0.0 && std::isfinite(surface_energy_j_m2), "surface_energy_j_m2",
+          "must be >= 0");
+  Require(plasticity_ratio >= 0.0 && plasticity_ratio < 1.0, "plasticity_ratio",
+          "must be in [0, 1)");
+  // Exponents below 1 would make the branch stiffness infinite at d = 0.
+  Require(slope_exponent >= 1.0 && std::isfinite(slope_exponent), "slope_exponent", "must be >= 1");
+  Require(tensile_exponent >= 1.0 && std::isfinite(tensile_exponent), "tensile_exponent",
+          "must be >= 1");
+  Require(tangential_stiffness_multiplier > 0.0 && std::isfinite(tangential_stiffness_multiplier),
+          "tangential_stiffness_multiplier", "must be positive");
+  Require(loading_stiffness_n_m_pow_n >= 0.0 && std::isfinite(loading_stiffness_n_m_pow_n),
+          "loading_stiffness_n_m_pow_n", "must be >= 0 (0 = from shear_modulus_pa)");
+  // The Hertz-equivalent k1 = 4/3 E* sqrt(r_e) has the units of k1 only for n = 3/2.
+  Require(loading_stiffness_n_m_pow_n > 0.0 || slope_exponent == 1.5, "slope_exponent",
+          "must be 1.5 when k1 comes from shear_modulus_pa; else set loading_stiffness_n_m_pow_n");
+}
+
+MaterialParams EepaParams::Material() const {
+  MaterialParams material;
+  material.youngs_modulus_pa = YoungsModulusPa();
+  material.poisson_ratio = poisson_ratio;
+  material.density_kg_m3 = density_kg_m3;
+  material.friction = friction;
+  material.rolling_stiffness = rolling_stiffness;
+  material.rolling_limit = rolling_friction;
+  material.restitution = restitution;
+  return material;
+}
+
+EepaParams Seed001EepaSoil(const std::string& name) {
+  // Seed 001 Table 3 ("Input simulation parameters of soil models"; also
+  // shared/reference/soils_dem_eepa.csv). Particle size 10 mm in both soils.
+  EepaParams soil;
+  if (name == "2NS_sand") {
+    soil.density_kg_m3 = 2500.0;
+    soil.shear_modulus_pa = 5.0e6;
+    soil.poisson_ratio = 0.4;
+    soil.restitution = 0.6;
+    soil.friction = 0.5;
+    soil.rolling_friction = 0.01;
+    soil.pull_off_force_n = -60.0;
+    soil.surface_energy_j_m2 = 0.0;
+    soil.plasticity_ratio = 0.5;
+    soil.slope_exponent = 1.5;
+    soil.tensile_exponent = 1.5;
+    soil.tangential_stiffness_multiplier = 0.67;
+  } else if (name == "FGS") {
+    soil.density_kg_m3 = 2500.0;
+    soil.shear_modulus_pa = 5.0e8;
+    soil.poisson_ratio = 0.25;
+    soil.restitution = 0.6;
+    soil.friction = 0.5;
+    soil.rolling_friction = 0.01;
+    soil.pull_off_force_n = -2.0;
+    soil.surface_energy_j_m2 = 7.0;
+    soil.plasticity_ratio = 0.9;
+    soil.slope_exponent = 1.5;
+    soil.tensile_exponent = 1.5;
+    soil.tangential_stiffness_multiplier = 0.67;
+  } else {
+    throw InputError("soil", "unknown seed 001 soil '" + name + "' (2NS_sand, FGS)");
+  }
+  soil.rolling_stiffness = 2.25;         // not in Table 3: Ai et al. (2011) 3D prefactor
+  soil.loading_stiffness_n_m_pow_n = 0;  // k1 from G and nu (Hertz-equivalent)
+  return soil;
+}
+
+EepaNormal::EepaNormal(const EepaParams& params)
+    : params_(params),
+      plastic_overlap_factor_(std::pow(params.plasticity_ratio, 1.0 / params.slope_exponent)) {
+  params_.Validate();
+}
+
+double EepaNormal::LoadingStiffness(double effective_radius_m) const {
+  // EDEM sets k1 from G and nu as Hertz does: F = 4/3 E* sqrt(r_e) d^{3/2} on first loading.
+  if (params_.loading_stiffness_n_m_pow_n > 0.0) return params_.loading_stiffness_n_m_pow_n;
+  return 4.0 / 3.0 * params_.EffectiveModulusPa() * std::sqrt(effective_radius_m);
+}
+
+double EepaNormal::LoadingBranchStiffness(double overlap_m, double effective_radius_m) const {
+  if (overlap_m <= 0.0) return 0.0;
+  const double n = params_.slope_exponent;
+  return n * LoadingStiffness(effective_radius_m) * Power(overlap_m, n) / overlap_m;
+}
+
+EepaNormal::Branches EepaNormal::BranchesFor(double max_overlap_m,
+                                             double effective_radius_m) const {
+  Branches b;
+  const double n = params_.slope_exponent;
+  b.k1 = LoadingStiffness(effective_radius_m);
+  b.k2 = b.k1 / (1.0 - params_.plasticity_ratio);  // lambda_p = 1 - k1/k2
+  // d_p = (1 - k1/k2)^{1/n} d_max, so d_p^n = lambda_p d_max^n.
+  b.plastic_overlap_pow_n = params_.plasticity_ratio * Power(max_overlap_m, n);
+  // Pull below f0 grows with the plastic contact patch: 3/2 pi Delta_gamma a_p, a_p^2 = r_e d_p.
+  const double plastic_overlap_m = plastic_overlap_factor_ * max_overlap_m;
+  const double pull_n =
+      1.5 * kPi * params_.surface_energy_j_m2 * std::sqrt(effective_radius_m * plastic_overlap_m);
+  // The unloading branch reaches f_min = f0 - pull at d_min^n = d_p^n - pull / k2.
+  b.min_overlap_pow_n = b.plastic_overlap_pow_n - pull_n / b.k2;
+  b.has_adhesive_branch = pull_n == 0.0 || b.min_overlap_pow_n > 0.0;
+  b.k_adh = 0.0;
+  if (pull_n > 0.0 && b.has_adhesive_branch) {
+    b.k_adh = pull_n / Power(b.min_overlap_pow_n, params_.tensile_exponent / n);
+  }
+  return b;
+}
+
+NormalResponse EepaNormal::Force(double overlap_m, double max_overlap_m,
+                                 double effective_radius_m) const {
+  if (overlap_m <= 0.0) return {};
+  const double n = params_.slope_exponent, chi = params_.tensile_exponent;
+  const double f0 = params_.pull_off_force_n;
+  const Branches b = BranchesFor(std::max(max_overlap_m, overlap_m), effective_radius_m);
+  const double d_pow_n = Power(overlap_m, n);
+  const double loading_stiffness_n_m = n * b.k1 * d_pow_n / overlap_m;
+  // Loading f0 + k1 d^n: on the virgin curve (d = d_max) or above the unloading line.
+  const double loading_n = b.k1 * d_pow_n;
+  const double unloading_n = b.k2 * (d_pow_n - b.plastic_overlap_pow_n);
+  if (overlap_m >= max_overlap_m || loading_n <= unloading_n) {
+    return {f0 + loading_n, loading_stiffness_n_m, loading_stiffness_n_m};
+  }
+  // Unloading/reloading f0 + k2 (d^n - d_p^n) down to d_min, then adhesive f0 - k_adh d^chi.
+  const double d_pow_chi = Power(overlap_m, chi);
+  const double adhesive_n = -b.k_adh * d_pow_chi;
+  if (!b.has_adhesive_branch || unloading_n >= adhesive_n) {
+    return {f0 + unloading_n, n * b.k2 * d_pow_n / overlap_m, loading_stiffness_n_m};
+  }
+  return {f0 + adhesive_n, -chi * b.k_adh * d_pow_chi / overlap_m, loading_stiffness_n_m};
+}
+
+double EepaNormal::UnloadingEnergyJ(double overlap_m, double max_overlap_m,
+                                    double effective_radius_m) const {
+  if (overlap_m <= 0.0) return 0.0;
+  const double n = params_.slope_exponent, chi = params_.tensile_exponent;
+  const double f0 = params_.pull_off_force_n;
+  const Branches b = BranchesFor(std::max(max_overlap_m, overlap_m), effective_radius_m);
+  // Antiderivative of the unloading branch k2 (s^n - d_p^n).
+  auto unloading_j = [&](double s) {
+    return b.k2 * (Power(s, n + 1.0) / (n + 1.0) - b.plastic_overlap_pow_n * s);
+  };
+  if (!b.has_adhesive_branch) return f0 * overlap_m + unloading_j(overlap_m);
+  // Adhesive branch -k_adh s^chi below d_min, unloading branch above it.
+  const double min_overlap_m = std::pow(std::max(b.min_overlap_pow_n, 0.0), 1.0 / n);
+  const double s = std::min(overlap_m, min_overlap_m);
+  double energy_j = f0 * overlap_m - b.k_adh * Power(s, chi + 1.0) / (chi + 1.0);
+  if (overlap_m > min_overlap_m) energy_j += unloading_j(overlap_m) - unloading_j(min_overlap_m);
+  return energy_j;
+}
+
+double EepaNormal::MinimumForceN(double max_overlap_m, double effective_radius_m) const {
+  const Branches b = BranchesFor(max_overlap_m, effective_radius_m);
+  // With an adhesive branch the minimum is at d_min, f0 - k_adh d_min^chi; without, the unloading
+  // branch is still falling at separation, f0 - k2 d_p^n.
+  if (b.has_adhesive_branch) {
+    return params_.pull_off_force_n -
+           b.k_adh * std::pow(std::max(b.min_overlap_pow_n, 0.0),
+                              params_.tensile_exponent / params_.slope_exponent);
+  }
+  return params_.pull_off_force_n - b.k2 * b.plastic_overlap_pow_n;
+}
+
+NormalResponse EepaNormal::Evaluate(double overlap_m, double effective_radius_m) const {
+  return Force(overlap_m, overlap_m, effective_radius_m);
+}
+
+double EepaNormal::ElasticEnergyJ(double overlap_m, double effective_radius_m) const {
+  return UnloadingEnergyJ(overlap_m, overlap_m, effective_radius_m);
+}
+
+NormalResponse EepaNormal::EvaluateWithHistory(double overlap_m, double effective_radius_m,
+                                               ContactHistory& history) const {
+  history.max_overlap_m = std::max(history.max_overlap_m, overlap_m);
+  return Force(overlap_m, history.max_overlap_m, effective_radius_m);
+}
+
+double EepaNormal::ElasticEnergyWithHistoryJ(double overlap_m, double effective_radius_m,
+                                             const ContactHistory& history) const {
+  return UnloadingEnergyJ(overlap_m, history.max_overlap_m, effective_radius_m);
+}
+
+EepaTangential::EepaTangential(const EepaParams& params)
+    : normal_(params),
+      multiplier_(params.tangential_stiffness_multiplier),
+      friction_(params.friction) {}
+
+double EepaTangential::Stiffness(double overlap_m, double effective_radius_m) const {
+  // k_t = m_t n k1 d^{n-1}: the multiplier times the loading-branch stiffness.
+  if (overlap_m <= 0.0) return 0.0;
+  return multiplier_ * normal_.LoadingBranchStiffness(overlap_m, effective_radius_m);
+}
+
 ContactModel::ContactModel(std::shared_ptr<const NormalModel> normal,
                            std::shared_ptr<const DampingModel> damping,
                            std::shared_ptr<const TangentialModel> tangential,
@@ -142,16 +354,37 @@ ContactModel ContactModel::HertzMindlin(const MaterialParams& material) {
                       std::make_shared<MindlinTangential>(material), rolling);
 }
 
+ContactModel ContactModel::Eepa(const EepaParams& params) {
+  params.Validate();
+  std::shared_ptr<const DampingModel> damping;
+  if (params.restitution < 1.0) {
+    damping = std::make_shared<RestitutionDamping>(params.restitution, true);
+  } else {
+    damping = std::make_shared<ZeroDamping>();
+  }
+  std::shared_ptr<const RollingModel> rolling;
+  if (params.rolling_stiffness > 0.0 && params.rolling_friction > 0.0) {
+    rolling =
+        std::make_shared<ElasticPlasticRolling>(params.rolling_stiffness, params.rolling_friction);
+  } else {
+    rolling = std::make_shared<NoRolling>();
+  }
+  return ContactModel(std::make_shared<EepaNormal>(params), damping,
+                      std::make_shared<EepaTangential>(params), rolling);
+}
+
 ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
                                      ContactHistory& history) const {
   ContactResult result;
   const Vec3& n = kin.normal;
   const double m_eff = kin.effective_mass_kg;
 
-  // Normal: elastic spring plus dashpot on the normal relative velocity v_n (< 0 approaching).
-  const NormalResponse spring = normal_->Evaluate(kin.overlap_m, kin.effective_radius_m);
+  // Normal: spring (which may advance the history) plus dashpot on the normal relative velocity
+  // v_n (< 0 approaching); the dashpot scales with the loading-branch stiffness.
+  const NormalResponse spring =
+      normal_->EvaluateWithHistory(kin.overlap_m, kin.effective_radius_m, history);
   const double v_n = kin.contact_velocity_m_s.dot(n);
-  const double gamma_n = damping_->NormalCoefficient(spring.stiffness_n_m, m_eff);
+  const double gamma_n = damping_->NormalCoefficient(spring.loading_stiffness_n_m, m_eff);
   const double f_n = spring.force_n - gamma_n * v_n;
   result.normal_force_n = f_n;
   result.normal_stiffness_n_m = spring.stiffness_n_m;
@@ -177,7 +410,8 @@ ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
   result.force_on_i_n = f_n * n + f_t;
   // Tangential force acts at the contact point: arm -a_i n from i, +a_j n from j.
   const Vec3 n_cross_ft = n.cross(f_t);
-  const Vec3 rolling_torque = rolling_->Torque(kin, spring.stiffness_n_m, f_n, dt_s, history);
+  const Vec3 rolling_torque =
+      rolling_->Torque(kin, spring.loading_stiffness_n_m, f_n, dt_s, history);
   result.torque_on_i_n_m = -kin.arm_i_m * n_cross_ft + rolling_torque;
   result.torque_on_j_n_m = -kin.arm_j_m * n_cross_ft - rolling_torque;
   return result;

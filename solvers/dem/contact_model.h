@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <string>
 
 namespace gonogo::dem {
 
@@ -35,6 +36,7 @@ struct MaterialParams {
 struct ContactHistory {
   Vec3 tangential_displacement_m = Vec3::Zero();  // xi, stored tangential spring elongation
   Vec3 rolling_angle_rad = Vec3::Zero();          // theta_r, accumulated relative rolling rotation
+  double max_overlap_m = 0.0;  // delta_max, largest overlap of this contact (EEPA plasticity)
 };
 
 // Kinematics of one contact at the current step. `normal` points from body j to body i.
@@ -61,17 +63,38 @@ struct ContactResult {
 };
 
 struct NormalResponse {
-  double force_n = 0.0;        // elastic normal force F_n(d_n)
-  double stiffness_n_m = 0.0;  // k_n = dF_n / dd_n
+  double force_n = 0.0;        // elastic normal force F_n(d_n), compression positive
+  double stiffness_n_m = 0.0;  // k_n = dF_n / dd_n on the branch the contact is on (may be < 0)
+  // Stiffness of the first (virgin) loading branch at d_n, > 0. The dashpot and the rolling
+  // spring scale with it. Equal to stiffness_n_m for an elastic law such as Hertz.
+  double loading_stiffness_n_m = 0.0;
 };
 
-// Elastic normal law F_n(d_n).
+// Normal law F_n(d_n), elastic or history dependent. An elastic law implements the two
+// history-free functions; a history-dependent one (EEPA) also overrides the two *WithHistory
+// functions, which ContactModel calls with the contact's own history.
 class NormalModel {
  public:
   virtual ~NormalModel() = default;
+  // Force at overlap d_n > 0 for a contact loaded monotonically to d_n (no history).
   virtual NormalResponse Evaluate(double overlap_m, double effective_radius_m) const = 0;
-  // Stored elastic energy U(d_n) = integral of F_n, for energy balances.
+  // Stored elastic energy U(d_n) = integral of F_n from 0, for energy balances.
   virtual double ElasticEnergyJ(double overlap_m, double effective_radius_m) const = 0;
+
+  // Force at overlap d_n > 0 for this contact; first advances `history` to include d_n.
+  // Default: the law has no history, so Evaluate(overlap_m, effective_radius_m).
+  virtual NormalResponse EvaluateWithHistory(double overlap_m, double effective_radius_m,
+                                             ContactHistory& history) const {
+    (void)history;
+    return Evaluate(overlap_m, effective_radius_m);
+  }
+  // Energy returned if the contact unloaded from d_n to separation along its current unloading
+  // branch (the integral of F_n from 0 to d_n on that branch). Default: ElasticEnergyJ.
+  virtual double ElasticEnergyWithHistoryJ(double overlap_m, double effective_radius_m,
+                                           const ContactHistory& history) const {
+    (void)history;
+    return ElasticEnergyJ(overlap_m, effective_radius_m);
+  }
 };
 
 // Viscous damping coefficients gamma (N s/m) from the spring stiffness and the effective mass.
@@ -168,6 +191,104 @@ class NoRolling : public RollingModel {
   }
 };
 
+// Edinburgh Elasto-Plastic Adhesion (EEPA) parameters of one grain material (Morrissey 2013;
+// Thakur et al. 2014; EDEM's EEPA model). Same material on both sides of a contact. Defaults are
+// the fine-grained sand (FGS) of seed 001 Table 3. Validate() throws InputError naming the field.
+struct EepaParams {
+  double shear_modulus_pa = 5.0e8;   // G
+  double poisson_ratio = 0.25;       // nu, in [0, 0.5)
+  double density_kg_m3 = 2500.0;     // rho
+  double restitution = 0.6;          // e in (0, 1]; sets the dashpot (1 = none)
+  double friction = 0.5;             // mu, Coulomb sliding coefficient
+  double rolling_friction = 0.01;    // eta in |M_r| <= eta F_n r_e
+  double rolling_stiffness = 2.25;   // beta in k_r = beta k_n eta^2 r_e^2 (Ai et al. 2011)
+  double pull_off_force_n = -2.0;    // f0 <= 0, constant attraction (EDEM sign: negative)
+  double surface_energy_j_m2 = 7.0;  // Delta gamma >= 0
+  double plasticity_ratio = 0.9;     // lambda_p = 1 - k1/k2, in [0, 1)
+  double slope_exponent = 1.5;       // n >= 1, loading and unloading branches
+  double tensile_exponent = 1.5;     // chi >= 1, adhesive branch
+  double tangential_stiffness_multiplier = 0.67;  // k_t / (loading normal stiffness) > 0
+  // k1 in N/m^n. 0 = Hertz-equivalent k1 = 4/3 E* sqrt(r_e) from G and nu (needs n = 1.5).
+  double loading_stiffness_n_m_pow_n = 0.0;
+
+  void Validate() const;
+  double YoungsModulusPa() const { return 2.0 * shear_modulus_pa * (1.0 + poisson_ratio); }
+  // E* of a same-material pair, as MaterialParams::EffectiveModulusPa.
+  double EffectiveModulusPa() const {
+    return YoungsModulusPa() / (2.0 * (1.0 - poisson_ratio * poisson_ratio));
+  }
+  // The elastic constants as MaterialParams (for the Rayleigh time step and particle density).
+  MaterialParams Material() const;
+};
+
+// The two soils of seed 001 Table 3 by name, "2NS_sand" or "FGS". Throws InputError("soil").
+EepaParams Seed001EepaSoil(const std::string& name);
+
+// EEPA normal law (Thakur et al. 2014, Granular Matter 16:383, sec. 2; Morrissey 2013). With
+// d = d_n, d_max = history.max_overlap_m and k2 = k1 / (1 - lambda_p):
+//   F = f0 + min(k1 d^n, max(k2 (d^n - d_p^n), -k_adh d^chi)),  d_p^n = lambda_p d_max^n,
+// the three branches of the paper in one expression: loading f0 + k1 d^n, unloading/reloading
+// f0 + k2 (d^n - d_p^n), adhesive f0 - k_adh d^chi.
+// k_adh makes the adhesive branch meet the unloading one at the minimum force
+//   f_min = f0 - 3/2 pi Delta_gamma a_p,  a_p = sqrt(r_e d_p),
+// reached at d_min^n = d_p^n - (f0 - f_min) / k2, so k_adh = (f0 - f_min) / d_min^chi. When
+// d_min^n <= 0 the unloading branch reaches d = 0 first and there is no adhesive branch.
+// Sources and choices: solvers/dem/README.md.
+class EepaNormal : public NormalModel {
+ public:
+  explicit EepaNormal(const EepaParams& params);
+  // Virgin loading, d_max = d_n: f0 + k1 d^n.
+  NormalResponse Evaluate(double overlap_m, double effective_radius_m) const override;
+  // Integral of F from 0 to d_n on the unloading branch of d_max = d_n.
+  double ElasticEnergyJ(double overlap_m, double effective_radius_m) const override;
+  // Sets history.max_overlap_m = max(d_max, d_n), then F on the branch of (d_n, d_max).
+  NormalResponse EvaluateWithHistory(double overlap_m, double effective_radius_m,
+                                     ContactHistory& history) const override;
+  double ElasticEnergyWithHistoryJ(double overlap_m, double effective_radius_m,
+                                   const ContactHistory& history) const override;
+
+  // F and dF/dd at overlap d_n <= max_overlap_m of a contact whose largest overlap was
+  // max_overlap_m; changes nothing.
+  NormalResponse Force(double overlap_m, double max_overlap_m, double effective_radius_m) const;
+  // Integral of F(s, max_overlap_m) for s from 0 to overlap_m <= max_overlap_m.
+  double UnloadingEnergyJ(double overlap_m, double max_overlap_m, double effective_radius_m) const;
+  // k1 in N/m^n for effective radius r_e.
+  double LoadingStiffness(double effective_radius_m) const;
+  // dF/dd of the loading branch, n k1 d^{n-1} (N/m).
+  double LoadingBranchStiffness(double overlap_m, double effective_radius_m) const;
+  // Most negative force f_min after loading to max_overlap_m (= f0 without adhesion).
+  double MinimumForceN(double max_overlap_m, double effective_radius_m) const;
+
+ private:
+  // The branch constants of one contact after loading to d_max.
+  struct Branches {
+    double k1, k2;                 // N/m^n
+    double plastic_overlap_pow_n;  // d_p^n
+    double min_overlap_pow_n;      // d_min^n
+    bool has_adhesive_branch;      // false when d_min^n <= 0 and Delta_gamma > 0
+    double k_adh;                  // N/m^chi
+  };
+  Branches BranchesFor(double max_overlap_m, double effective_radius_m) const;
+
+  EepaParams params_;
+  double plastic_overlap_factor_;  // lambda_p^{1/n}: d_p = lambda_p^{1/n} d_max
+};
+
+// EEPA tangential stiffness: k_t = m_t k_load, the multiplier m_t times the normal loading
+// stiffness as in EDEM, taken here as the slope of the loading branch k_load = n k1 d^{n-1}
+// (= 2 E* sqrt(r_e d), Hertz's S_n, for n = 1.5).
+class EepaTangential : public TangentialModel {
+ public:
+  explicit EepaTangential(const EepaParams& params);
+  double Stiffness(double overlap_m, double effective_radius_m) const override;
+  double Friction() const override { return friction_; }
+
+ private:
+  EepaNormal normal_;
+  double multiplier_;
+  double friction_;
+};
+
 // The four sub-models of one contact law. Immutable after construction; safe to share across
 // threads (Evaluate only writes the history it is given).
 class ContactModel {
@@ -180,6 +301,9 @@ class ContactModel {
   // Seed 000 law: Hertz + Mindlin + Coulomb + elastic-plastic rolling, damping from
   // material.restitution (none when it is 1).
   static ContactModel HertzMindlin(const MaterialParams& material);
+  // EEPA normal law + EEPA tangential stiffness + Coulomb + elastic-plastic rolling, damping from
+  // params.restitution on the loading stiffness (none when it is 1).
+  static ContactModel Eepa(const EepaParams& params);
 
   // Forces for one contact with overlap > 0; advances `history` by dt_s.
   ContactResult Evaluate(const ContactKinematics& kin, double dt_s, ContactHistory& history) const;

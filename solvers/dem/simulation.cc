@@ -291,14 +291,17 @@ double Simulation::ElasticNormalEnergyJ() const {
     if (pair_overlap_m_[k] <= 0.0) continue;
     const double r_i = particles_.radius_m[pairs[k].i];
     const double r_j = particles_.radius_m[pairs[k].j];
-    energy_j += model_.normal().ElasticEnergyJ(pair_overlap_m_[k], r_i * r_j / (r_i + r_j));
+    energy_j += model_.normal().ElasticEnergyWithHistoryJ(pair_overlap_m_[k], r_i * r_j / (r_i + r_j),
+                                                          pair_history_[k]);
   }
   for (std::size_t p = 0; p < particles_.size(); ++p) {
-    for (const Wall& wall : params_.walls) {
+    for (std::size_t w = 0; w < params_.walls.size(); ++w) {
+      const Wall& wall = params_.walls[w];
       const double overlap_m =
           particles_.radius_m[p] - (particles_.position_m[p] - wall.point_m).dot(wall.normal);
       if (overlap_m > 0.0) {
-        energy_j += model_.normal().ElasticEnergyJ(overlap_m, particles_.radius_m[p]);
+        energy_j += model_.normal().ElasticEnergyWithHistoryJ(
+            overlap_m, particles_.radius_m[p], wall_history_[p * params_.walls.size() + w]);
       }
     }
   }
@@ -380,10 +383,12 @@ constexpr char kStateTag[9] = "GNGDEM01";
 void PutHistory(ByteWriter& out, const ContactHistory& history) {
   out.Put(history.tangential_displacement_m);
   out.Put(history.rolling_angle_rad);
+  out.Put(history.max_overlap_m);
 }
 void GetHistory(ByteReader& in, ContactHistory& history) {
   in.Get(history.tangential_displacement_m);
   in.Get(history.rolling_angle_rad);
+  in.Get(history.max_overlap_m);
 }
 }  // namespace
 

@@ -211,7 +211,9 @@ TEST_F(RveTest, ConstitutiveSeamLeavesCommittedStatesAndFailsCleanly) {
     EXPECT_TRUE(responses[k].has_tangent);
     // Compressing the axis raises its stress; more compression, more stress.
     EXPECT_LT(responses[k].stress_pa(2, 2), -kPressurePa);
-    if (k > 0) EXPECT_LT(responses[k].stress_pa(2, 2), responses[k - 1].stress_pa(2, 2));
+    if (k > 0) {
+      EXPECT_LT(responses[k].stress_pa(2, 2), responses[k - 1].stress_pa(2, 2));
+    }
   }
   EXPECT_EQ(responses[3].status, material::UpdateStatus::kFailed);
   EXPECT_FALSE(responses[3].state);
