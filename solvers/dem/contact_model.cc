@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <typeinfo>
 #include <utility>
 
 #include "solvers/common/errors.h"
@@ -333,6 +334,35 @@ ContactModel::ContactModel(std::shared_ptr<const NormalModel> normal,
       rolling_(std::move(rolling)) {
   Require(normal_ && damping_ && tangential_ && rolling_, "contact_model",
           "every sub-model must be set");
+  // The seed 000 set gets the fused path (exact types only: a subclass may change the law).
+  const auto* hertz = dynamic_cast<const HertzNormal*>(normal_.get());
+  const auto* restitution = dynamic_cast<const RestitutionDamping*>(damping_.get());
+  const bool undamped = dynamic_cast<const ZeroDamping*>(damping_.get()) != nullptr;
+  const auto* mindlin = dynamic_cast<const MindlinTangential*>(tangential_.get());
+  const auto* spring = dynamic_cast<const ElasticPlasticRolling*>(rolling_.get());
+  const bool free_rolling = dynamic_cast<const NoRolling*>(rolling_.get()) != nullptr;
+  if (hertz && typeid(*normal_) == typeid(HertzNormal) && mindlin &&
+      typeid(*tangential_) == typeid(MindlinTangential) &&
+      ((restitution && typeid(*damping_) == typeid(RestitutionDamping)) ||
+       (undamped && typeid(*damping_) == typeid(ZeroDamping))) &&
+      ((spring && typeid(*rolling_) == typeid(ElasticPlasticRolling)) ||
+       (free_rolling && typeid(*rolling_) == typeid(NoRolling)))) {
+    fused_.enabled = true;
+    fused_.two_e_star_pa = 2.0 * hertz->effective_modulus_pa();
+    fused_.tangential_factor_pa = mindlin->StiffnessFactorPa();
+    const double damping = restitution ? -2.0 * std::sqrt(5.0 / 6.0) * restitution->beta() : 0.0;
+    fused_.normal_damping = damping;
+    fused_.tangential_damping =
+        restitution && restitution->tangential()
+            ? damping * std::sqrt(fused_.tangential_factor_pa / fused_.two_e_star_pa)
+            : 0.0;
+    fused_.friction = mindlin->Friction();
+    fused_.rolling = spring != nullptr;
+    if (spring) {
+      fused_.rolling_stiffness = spring->beta() * spring->eta() * spring->eta();
+      fused_.rolling_limit = spring->eta();
+    }
+  }
 }
 
 ContactModel ContactModel::HertzMindlin(const MaterialParams& material) {
@@ -375,6 +405,65 @@ ContactModel ContactModel::Eepa(const EepaParams& params) {
 
 ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
                                      ContactHistory& history) const {
+  return fused_.enabled ? EvaluateFused(kin, dt_s, history) : EvaluateGeneral(kin, dt_s, history);
+}
+
+ContactResult ContactModel::EvaluateFused(const ContactKinematics& kin, double dt_s,
+                                          ContactHistory& history) const {
+  // The general path below with the seed 000 sub-models written out: the same equations
+  // (README "Contact law (seed 000)"), sqrt(r_e d_n) and sqrt(k_n m*) taken once.
+  ContactResult result;
+  const Vec3& n = kin.normal;
+  const double root_m = std::sqrt(kin.effective_radius_m * kin.overlap_m);
+  const double k_n = fused_.two_e_star_pa * root_m;
+  const double elastic_n = (2.0 / 3.0) * k_n * kin.overlap_m;  // 4/3 E* sqrt(r_e) d^{3/2}
+  const double root_km = std::sqrt(k_n * kin.effective_mass_kg);
+  const double gamma_n = fused_.normal_damping * root_km;
+  const double v_n = kin.contact_velocity_m_s.dot(n);
+  const double f_n = elastic_n - gamma_n * v_n;
+  result.normal_force_n = f_n;
+  result.normal_stiffness_n_m = k_n;
+
+  const Vec3 v_t = kin.contact_velocity_m_s - v_n * n;
+  Vec3& xi = history.tangential_displacement_m;
+  ProjectOntoContactPlane(n, xi);
+  xi += v_t * dt_s;
+  const double k_t = fused_.tangential_factor_pa * root_m;
+  const double gamma_t = fused_.tangential_damping * root_km;
+  Vec3 f_t = -k_t * xi - gamma_t * v_t;
+  const double f_t_limit = fused_.friction * std::max(f_n, 0.0);
+  const double f_t_magnitude_sq = f_t.squaredNorm();
+  if (f_t_magnitude_sq > f_t_limit * f_t_limit) {
+    const double f_t_magnitude = std::sqrt(f_t_magnitude_sq);
+    f_t *= f_t_limit / f_t_magnitude;
+    xi = k_t > 0.0 ? Vec3(-(f_t + gamma_t * v_t) / k_t) : Vec3::Zero();
+    result.sliding = true;
+  }
+  result.tangential_stiffness_n_m = k_t;
+  result.force_on_i_n = f_n * n + f_t;
+  const Vec3 n_cross_ft = n.cross(f_t);
+  Vec3 rolling_torque = Vec3::Zero();
+  if (fused_.rolling) {
+    Vec3& theta = history.rolling_angle_rad;
+    ProjectOntoContactPlane(n, theta);
+    theta += (kin.relative_spin_rad_s - kin.relative_spin_rad_s.dot(n) * n) * dt_s;
+    const double r_e = kin.effective_radius_m;
+    const double k_r = fused_.rolling_stiffness * k_n * r_e * r_e;
+    rolling_torque = -k_r * theta;
+    const double limit = fused_.rolling_limit * std::max(f_n, 0.0) * r_e;
+    const double magnitude_sq = rolling_torque.squaredNorm();
+    if (magnitude_sq > limit * limit) {
+      rolling_torque *= limit / std::sqrt(magnitude_sq);
+      theta = k_r > 0.0 ? Vec3(-rolling_torque / k_r) : Vec3::Zero();
+    }
+  }
+  result.torque_on_i_n_m = -kin.arm_i_m * n_cross_ft + rolling_torque;
+  result.torque_on_j_n_m = -kin.arm_j_m * n_cross_ft - rolling_torque;
+  return result;
+}
+
+ContactResult ContactModel::EvaluateGeneral(const ContactKinematics& kin, double dt_s,
+                                            ContactHistory& history) const {
   ContactResult result;
   const Vec3& n = kin.normal;
   const double m_eff = kin.effective_mass_kg;

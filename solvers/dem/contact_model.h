@@ -129,6 +129,7 @@ class HertzNormal : public NormalModel {
   explicit HertzNormal(const MaterialParams& material);
   NormalResponse Evaluate(double overlap_m, double effective_radius_m) const override;
   double ElasticEnergyJ(double overlap_m, double effective_radius_m) const override;
+  double effective_modulus_pa() const { return effective_modulus_pa_; }
 
  private:
   double effective_modulus_pa_;
@@ -143,6 +144,8 @@ class RestitutionDamping : public DampingModel {
   double TangentialCoefficient(double tangential_stiffness_n_m,
                                double effective_mass_kg) const override;
   static double BetaFromRestitution(double restitution);
+  double beta() const { return beta_; }
+  bool tangential() const { return tangential_; }
 
  private:
   double beta_;
@@ -162,6 +165,8 @@ class MindlinTangential : public TangentialModel {
   explicit MindlinTangential(const MaterialParams& material);
   double Stiffness(double overlap_m, double effective_radius_m) const override;
   double Friction() const override { return friction_; }
+  // k_t / sqrt(r_e d_n) = 4 G / (2 - nu).
+  double StiffnessFactorPa() const { return 4.0 * shear_modulus_pa_ / (2.0 - poisson_ratio_); }
 
  private:
   double shear_modulus_pa_;
@@ -177,6 +182,8 @@ class ElasticPlasticRolling : public RollingModel {
   Vec3 Torque(const ContactKinematics& kin, double normal_stiffness_n_m, double normal_force_n,
               double dt_s, ContactHistory& history) const override;
   double StiffnessNmRad(double normal_stiffness_n_m, double effective_radius_m) const;
+  double beta() const { return beta_; }
+  double eta() const { return eta_; }
 
  private:
   double beta_;
@@ -309,12 +316,34 @@ class ContactModel {
   ContactResult Evaluate(const ContactKinematics& kin, double dt_s, ContactHistory& history) const;
 
   const NormalModel& normal() const { return *normal_; }
+  // True when the sub-models are the seed 000 set (Hertz, restitution or no damping, Mindlin,
+  // elastic-plastic or no rolling): Evaluate then takes a fused path with one square root for
+  // both stiffnesses and one for both dashpots, equal to the general path to round-off.
+  bool fused() const { return fused_.enabled; }
+  // The general path through the four sub-models, whatever they are (for checking the fused one).
+  ContactResult EvaluateGeneral(const ContactKinematics& kin, double dt_s,
+                                ContactHistory& history) const;
 
  private:
+  struct FusedHertzMindlin {
+    bool enabled = false;
+    double two_e_star_pa = 0.0;          // k_n / sqrt(r_e d_n)
+    double tangential_factor_pa = 0.0;   // k_t / sqrt(r_e d_n)
+    double normal_damping = 0.0;         // gamma_n / sqrt(k_n m*) = -2 sqrt(5/6) beta
+    double tangential_damping = 0.0;     // gamma_t / sqrt(k_n m*) = the above sqrt(k_t / k_n)
+    double friction = 0.0;
+    bool rolling = false;
+    double rolling_stiffness = 0.0;      // beta eta^2
+    double rolling_limit = 0.0;          // eta
+  };
+  ContactResult EvaluateFused(const ContactKinematics& kin, double dt_s,
+                              ContactHistory& history) const;
+
   std::shared_ptr<const NormalModel> normal_;
   std::shared_ptr<const DampingModel> damping_;
   std::shared_ptr<const TangentialModel> tangential_;
   std::shared_ptr<const RollingModel> rolling_;
+  FusedHertzMindlin fused_;
 };
 
 // Rotates a stored history vector onto the plane normal to `normal`, keeping its length (the

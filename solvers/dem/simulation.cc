@@ -97,7 +97,7 @@ void Simulation::Rebuild() {
       pair_history_[k] = old_history[k_old];
     }
   }
-  pair_overlap_m_.assign(pairs.size(), 0.0);
+  pair_overlap_m_.assign(pairs.size(), -1.0);  // "not yet evaluated": cleared if open
   pair_force_on_i_n_.assign(pairs.size(), Vec3::Zero());
   pair_torque_i_n_m_.assign(pairs.size(), Vec3::Zero());
   pair_torque_j_n_m_.assign(pairs.size(), Vec3::Zero());
@@ -114,20 +114,29 @@ void Simulation::ComputePairForces() {
   for (int k = 0; k < pair_count; ++k) {
     const int i = pairs[k].i;
     const int j = pairs[k].j;
-    const Vec3 separation = g.position_m[i] - (g.position_m[j] + pairs[k].ShiftM(cell_.edges_m));
-    const double distance_m = separation.norm();
-    const double overlap_m = g.radius_m[i] + g.radius_m[j] - distance_m;
-    pair_overlap_m_[k] = std::max(overlap_m, 0.0);
-    if (overlap_m <= 0.0 || distance_m == 0.0) {
-      // Out of contact: forces vanish and the history is forgotten.
-      pair_history_[k] = ContactHistory{};
-      pair_force_on_i_n_[k].setZero();
-      pair_torque_i_n_m_[k].setZero();
-      pair_torque_j_n_m_[k].setZero();
-      pair_normal_stiffness_n_m_[k] = 0.0;
-      pair_tangential_stiffness_n_m_[k] = 0.0;
+    const std::array<int, 3>& image = pairs[k].image;
+    const Vec3 separation = (image[0] | image[1] | image[2]) == 0
+                                ? Vec3(g.position_m[i] - g.position_m[j])
+                                : Vec3(g.position_m[i] - (g.position_m[j] + pairs[k].ShiftM(cell_.edges_m)));
+    const double reach_m = g.radius_m[i] + g.radius_m[j];
+    const double distance_sq = separation.squaredNorm();
+    const double distance_m = distance_sq < reach_m * reach_m ? std::sqrt(distance_sq) : reach_m;
+    const double overlap_m = reach_m - distance_m;
+    if (overlap_m <= 0.0 || distance_sq == 0.0) {
+      // Out of contact: forces vanish and the history is forgotten. A pair already cleared (its
+      // overlap slot is exactly 0; a rebuild marks every slot -1) needs no writes.
+      if (pair_overlap_m_[k] != 0.0) {
+        pair_overlap_m_[k] = 0.0;
+        pair_history_[k] = ContactHistory{};
+        pair_force_on_i_n_[k].setZero();
+        pair_torque_i_n_m_[k].setZero();
+        pair_torque_j_n_m_[k].setZero();
+        pair_normal_stiffness_n_m_[k] = 0.0;
+        pair_tangential_stiffness_n_m_[k] = 0.0;
+      }
       continue;
     }
+    pair_overlap_m_[k] = overlap_m;
     ContactKinematics kin;
     kin.normal = separation / distance_m;
     kin.overlap_m = overlap_m;
@@ -191,6 +200,7 @@ void Simulation::SumParticleForces() {
     Vec3 torque = Vec3::Zero();
     for (std::int64_t s = start[p]; s < start[p + 1]; ++s) {
       const int k = incident[s];
+      if (pair_overlap_m_[k] <= 0.0) continue;  // open pair: its slots are zero
       if (is_i[s]) {
         force += pair_force_on_i_n_[k];
         torque += pair_torque_i_n_m_[k];

@@ -22,6 +22,7 @@ constexpr double kServoSteps = 15.0;
 constexpr double kServoFloorStiffnessPa = 1e5;  // a gas has no contact stiffness
 constexpr double kEquilibriumRatio = 5e-3;      // unbalanced-force ratio of a settled packing
 constexpr double kPressureTolerance = 0.01;
+constexpr double kStressTolerance = 0.03;  // each component, of the target pressure
 constexpr int kConsolidationStepBudget = 400000;
 
 SimulationParams SimulationParamsFor(const RveParams& params, const MaterialParams& material,
@@ -156,11 +157,12 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
       SimulationParamsFor(params, consolidation_material, side_m, 0.0), std::move(grains));
   Rve rve(params, std::move(simulation));
 
-  // Isotropic consolidation: every normal stress held at -p by the servo, no shear.
+  // Isotropic consolidation: every normal stress held at -p and every shear stress at 0 by the
+  // servo (a random packing carries some shear stress otherwise; the cell shears a little).
   MixedControl isotropic;
-  for (int d = 0; d < 3; ++d) {
-    isotropic.stress_controlled[d][d] = true;
-    isotropic.target_stress_pa(d, d) = -params.consolidation_pressure_pa;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) isotropic.stress_controlled[a][b] = true;
+    isotropic.target_stress_pa(a, a) = -params.consolidation_pressure_pa;
   }
   const double target_pa = params.consolidation_pressure_pa;
   bool settled = false;
@@ -168,7 +170,10 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
     rve.ServoStep(isotropic);
     if (step % 100 == 99) {
       const double pressure_pa = MeanPressurePa(rve.StressPa());
+      const Matrix3 deviation =
+          rve.StressPa() + target_pa * Matrix3::Identity();  // 0 when isotropic at target
       settled = std::abs(pressure_pa - target_pa) < kPressureTolerance * target_pa &&
+                deviation.cwiseAbs().maxCoeff() < kStressTolerance * target_pa &&
                 rve.simulation_->UnbalancedForceRatio() < kEquilibriumRatio;
     }
     if (progress && step % 1000 == 999) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "solvers/common/errors.h"
 
@@ -141,6 +142,61 @@ TEST(MaterialParams, RejectsNonsense) {
   m = MaterialParams{};
   m.youngs_modulus_pa = -1.0;
   EXPECT_THROW(m.Validate(), InputError);
+}
+
+}  // namespace
+}  // namespace gonogo::dem
+
+namespace gonogo::dem {
+namespace {
+
+// The fused seed 000 path equals the general path through the four sub-models, to round-off,
+// over random contacts (sticking, sliding, rolling at the limit, with and without damping), and
+// it is taken only for the exact seed 000 sub-model types.
+TEST(ContactModel, FusedSeedPathEqualsTheGeneralPath) {
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (double restitution : {1.0, 0.5}) {
+    for (double rolling_limit : {0.0, 0.99}) {
+      MaterialParams material;
+      material.restitution = restitution;
+      material.rolling_limit = rolling_limit;
+      const ContactModel model = ContactModel::HertzMindlin(material);
+      ASSERT_TRUE(model.fused());
+      for (int trial = 0; trial < 20000; ++trial) {
+        ContactKinematics kin;
+        kin.normal = Vec3(unit(random), unit(random), unit(random)).normalized();
+        kin.overlap_m = 1e-6 * (1.001 + unit(random));
+        kin.effective_radius_m = 0.5e-3 * (1.5 + unit(random));
+        kin.effective_mass_kg = 1e-6 * (1.5 + unit(random));
+        kin.arm_i_m = 0.8e-3;
+        kin.arm_j_m = 0.9e-3;
+        kin.contact_velocity_m_s = 0.1 * Vec3(unit(random), unit(random), unit(random));
+        kin.relative_spin_rad_s = 100.0 * Vec3(unit(random), unit(random), unit(random));
+        ContactHistory fused_history;
+        fused_history.tangential_displacement_m = 2e-7 * Vec3(unit(random), unit(random), unit(random));
+        fused_history.rolling_angle_rad = 2e-3 * Vec3(unit(random), unit(random), unit(random));
+        ContactHistory general_history = fused_history;
+        const ContactResult fused = model.Evaluate(kin, 1e-6, fused_history);
+        const ContactResult general = model.EvaluateGeneral(kin, 1e-6, general_history);
+        const double force_scale = general.force_on_i_n.norm();
+        ASSERT_LT((fused.force_on_i_n - general.force_on_i_n).norm(), 1e-12 * force_scale);
+        const double torque_scale = general.torque_on_i_n_m.norm() + general.torque_on_j_n_m.norm() + 1e-30;
+        ASSERT_LT((fused.torque_on_i_n_m - general.torque_on_i_n_m).norm(), 1e-12 * torque_scale);
+        ASSERT_LT((fused.torque_on_j_n_m - general.torque_on_j_n_m).norm(), 1e-12 * torque_scale);
+        ASSERT_EQ(fused.sliding, general.sliding);
+        ASSERT_NEAR(fused.normal_stiffness_n_m, general.normal_stiffness_n_m,
+                    1e-13 * general.normal_stiffness_n_m);
+        ASSERT_LT((fused_history.tangential_displacement_m - general_history.tangential_displacement_m).norm(),
+                  1e-12 * general_history.tangential_displacement_m.norm() + 1e-30);
+        ASSERT_LT((fused_history.rolling_angle_rad - general_history.rolling_angle_rad).norm(),
+                  1e-12 * general_history.rolling_angle_rad.norm() + 1e-30);
+      }
+    }
+  }
+  // Another law keeps the general path.
+  const ContactModel eepa = ContactModel::Eepa(Seed001EepaSoil("FGS"));
+  EXPECT_FALSE(eepa.fused());
 }
 
 }  // namespace
