@@ -82,14 +82,6 @@ class ByteReader {
     values.resize(count);
     for (T& value : values) Get(value);
   }
-  template <typename T>
-  void GetVector(std::vector<T>& values) {
-    std::uint64_t count = 0;
-    Get(count);
-    Require(count <= (bytes_.size() - offset_), "state", "truncated (array longer than the buffer)");
-    values.resize(count);
-    for (T& value : values) Get(value);
-  }
   void ExpectTag(const char (&tag)[9]) {
     Need(8);
     Require(std::memcmp(bytes_.data() + offset_, tag, 8) == 0, "state",

@@ -169,9 +169,9 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
   for (int step = 0; step < kConsolidationStepBudget && !settled; ++step) {
     rve.ServoStep(isotropic);
     if (step % 100 == 99) {
-      const double pressure_pa = MeanPressurePa(rve.StressPa());
-      const Matrix3 deviation =
-          rve.StressPa() + target_pa * Matrix3::Identity();  // 0 when isotropic at target
+      const Matrix3 stress_pa = rve.StressPa();
+      const double pressure_pa = MeanPressurePa(stress_pa);
+      const Matrix3 deviation = stress_pa + target_pa * Matrix3::Identity();  // 0 at target
       settled = std::abs(pressure_pa - target_pa) < kPressureTolerance * target_pa &&
                 deviation.cwiseAbs().maxCoeff() < kStressTolerance * target_pa &&
                 rve.simulation_->UnbalancedForceRatio() < kEquilibriumRatio;
@@ -194,8 +194,10 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
   return consolidated;
 }
 
-double Rve::StableRate1S() const {
-  const double pressure_pa = std::max(MeanPressurePa(StressPa()), params_.consolidation_pressure_pa);
+double Rve::StableRate1S() const { return StableRateAt1S(StressPa()); }
+
+double Rve::StableRateAt1S(const Matrix3& stress_pa) const {
+  const double pressure_pa = std::max(MeanPressurePa(stress_pa), params_.consolidation_pressure_pa);
   // I = rate d sqrt(rho / p) (GDR MiDi 2004, Eur. Phys. J. E 14, 341).
   return params_.max_inertial_number /
          (2.0 * params_.mean_radius_m *
@@ -213,7 +215,7 @@ void Rve::ServoStep(const MixedControl& control) {
   // A gas (no contact yet) may be compressed ten times faster: nothing inertial to disturb. A
   // held stress may need its axis to move faster than the driven one (dilatancy), hence 3x.
   const double rate_cap_1_s =
-      StableRate1S() * (simulation_->ContactCount() < params_.grain_count ? 10.0 : 3.0);
+      StableRateAt1S(stress_pa) * (simulation_->ContactCount() < params_.grain_count ? 10.0 : 3.0);
   Matrix3 rate_1_s = control.strain_rate_1_s;
   for (int i = 0; i < 3; ++i) {
     for (int j = i; j < 3; ++j) {

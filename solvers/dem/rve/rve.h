@@ -104,6 +104,7 @@ class Rve {
  private:
   Rve(const RveParams& params, std::unique_ptr<Simulation> simulation);
   void ServoStep(const MixedControl& control);
+  double StableRateAt1S(const Matrix3& stress_pa) const;  // StableRate1S for a known stress
 
   RveParams params_;
   std::unique_ptr<Simulation> simulation_;
