@@ -17,7 +17,8 @@ namespace gonogo::server {
 
 struct ServiceLimits {
   int64_t max_upload_bytes = 512LL << 20;  // all rasters of one job together
-  int curve_timeout_ms = 60000;            // GetTractionCurve's wait for the pool
+  // GetTractionCurve's wait for the pool: an fe-classic curve takes minutes on one core.
+  int curve_timeout_ms = 30 * 60 * 1000;
 };
 
 // Maps exceptions thrown by validation and storage to gRPC statuses.

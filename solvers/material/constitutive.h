@@ -16,6 +16,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,6 +26,13 @@ namespace gonogo::material {
 
 using Matrix3 = Eigen::Matrix3d;
 using Voigt6x6 = Eigen::Matrix<double, 6, 6>;
+
+// Small-strain moduli of a fresh point: what a solver's stable time step and hourglass stiffness
+// are estimated from.
+struct ElasticModuli {
+  double bulk_pa = 0;
+  double shear_pa = 0;
+};
 
 // What a model keeps at one integration point between increments.
 class MaterialState {
@@ -65,6 +74,27 @@ class ConstitutiveModel {
   // parallel; the results do not depend on how the batch is split.
   virtual std::vector<PointResponse> Update(const std::vector<PointIncrement>& increments,
                                             bool want_tangent) const = 0;
+  // Small-strain moduli of a fresh point, for a solver's stable time step and hourglass stiffness.
+  // Default: from the tangent D of a zero increment on InitialState(): K = (sum of the upper-left
+  // 3 x 3 of D) / 9, G = mean of the three shear diagonal terms D(3,3), D(4,4), D(5,5). Throws
+  // std::logic_error when the model fails that update or gives no tangent.
+  virtual ElasticModuli InitialElasticModuli() const;
 };
+
+// Helpers for implementations.
+
+// Runs `update_one` over the batch on OpenMP threads with a static schedule. Each point writes
+// only its own response, so the results do not depend on the thread count. An exception thrown by
+// `update_one` becomes a kFailed response whose reason is its message.
+std::vector<PointResponse> UpdateEachPoint(
+    const std::vector<PointIncrement>& increments,
+    const std::function<PointResponse(const PointIncrement&)>& update_one);
+
+// `count` doubles as raw bytes (host byte order), for Serialize().
+std::string PackDoubles(const double* values, std::size_t count);
+// The inverse, for RestoreState(): throws gonogo::InputError(field, ...) when `bytes` does not
+// hold exactly `count` doubles or one of them is not finite.
+std::vector<double> UnpackDoubles(const std::string& bytes, std::size_t count,
+                                  const std::string& field);
 
 }  // namespace gonogo::material

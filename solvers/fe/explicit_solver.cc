@@ -1,0 +1,197 @@
+#include "solvers/fe/explicit_solver.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::fe {
+
+void ExplicitOptions::Validate(const std::string& p) const {
+  Require(density_kg_m3 > 0 && std::isfinite(density_kg_m3), p + "density_kg_m3",
+          "must be positive");
+  Require(gravity_m_s2.allFinite(), p + "gravity_m_s2", "must be finite");
+  Require(hourglass_coefficient >= 0 && hourglass_coefficient <= 0.15, p + "hourglass_coefficient",
+          "must lie in [0, 0.15]");
+  Require(time_step_safety > 0 && time_step_safety <= 1, p + "time_step_safety",
+          "must lie in (0, 1]");
+  Require(mass_damping_per_s >= 0, p + "mass_damping_per_s", "must not be negative");
+  Require(threads >= 1, p + "threads", "must be at least 1");
+}
+
+ExplicitSolver::ExplicitSolver(HexMesh mesh,
+                               std::shared_ptr<const material::ConstitutiveModel> model,
+                               const ExplicitOptions& options)
+    : mesh_(std::move(mesh)), model_(std::move(model)), options_(options) {
+  options_.Validate("fe.");
+  Require(model_ != nullptr, "fe.material", "is missing");
+  Require(mesh_.num_elements() > 0, "mesh", "has no elements");
+  moduli_ = model_->InitialElasticModuli();
+  Require(moduli_.bulk_pa > 0 && moduli_.shear_pa > 0, "fe.material",
+          "its initial elastic moduli must be positive");
+  const double p_wave_modulus_pa = moduli_.bulk_pa + 4.0 / 3.0 * moduli_.shear_pa;
+  const double wave_speed_m_s = std::sqrt(p_wave_modulus_pa / options_.density_kg_m3);
+
+  const int ne = mesh_.num_elements();
+  const int nn = mesh_.num_nodes();
+  references_.resize(ne);
+  hourglass_stiffness_n_m_.resize(ne);
+  nodal_masses_kg_.assign(nn, 0.0);
+  double min_length_m = std::numeric_limits<double>::infinity();
+  for (int e = 0; e < ne; ++e) {
+    std::array<Vec3, 8> x;
+    for (int a = 0; a < 8; ++a) x[a] = mesh_.reference_positions_m[mesh_.elements[e][a]];
+    references_[e] = ComputeHex8Reference(x);
+    const Hex8Reference& r = references_[e];
+    // Stiffness-form hourglass coefficient, kappa = eps_hg (K + 4G/3) V_0 (b_a . b_a) / 3
+    // (Flanagan & Belytschko 1981): scales with the element's own P-wave stiffness.
+    hourglass_stiffness_n_m_[e] = options_.hourglass_coefficient * p_wave_modulus_pa *
+                                  r.volume_m3 * r.gradients_per_m.squaredNorm() / 3.0;
+    // Lumped mass: an eighth of the element's mass to each of its nodes (row sum of the
+    // consistent mass of a parallelepiped).
+    for (int a = 0; a < 8; ++a) {
+      nodal_masses_kg_[mesh_.elements[e][a]] += options_.density_kg_m3 * r.volume_m3 / 8.0;
+    }
+    min_length_m = std::min(min_length_m, r.characteristic_length_m);
+  }
+  stable_time_step_s_ = options_.time_step_safety * min_length_m / wave_speed_m_s;
+
+  previous_f_.assign(ne, Eigen::Matrix3d::Identity());
+  trial_f_.assign(ne, Eigen::Matrix3d::Identity());
+  states_.resize(ne);
+  for (int e = 0; e < ne; ++e) states_[e] = model_->InitialState();
+  stress_pa_.assign(ne, Eigen::Matrix3d::Zero());
+  element_forces_n_.assign(ne, Mat83::Zero());
+  increments_.resize(ne);
+
+  node_element_offsets_.assign(nn + 1, 0);
+  for (const auto& element : mesh_.elements) {
+    for (int node : element) ++node_element_offsets_[node + 1];
+  }
+  for (int n = 0; n < nn; ++n) node_element_offsets_[n + 1] += node_element_offsets_[n];
+  node_element_slots_.resize(node_element_offsets_[nn]);
+  std::vector<int> fill(node_element_offsets_.begin(), node_element_offsets_.end() - 1);
+  for (int e = 0; e < ne; ++e) {
+    for (int a = 0; a < 8; ++a) node_element_slots_[fill[mesh_.elements[e][a]]++] = 8 * e + a;
+  }
+
+  positions_m_ = mesh_.reference_positions_m;
+  velocities_m_s_.assign(nn, Vec3::Zero());
+  internal_forces_n_.assign(nn, Vec3::Zero());
+  external_forces_n_.assign(nn, Vec3::Zero());
+  prescribed_.assign(nn, Eigen::Matrix<bool, 3, 1>::Constant(false));
+  prescribed_velocity_m_s_.assign(nn, Vec3::Zero());
+}
+
+void ExplicitSolver::PrescribeVelocity(int node, int dof, double velocity_m_s) {
+  Require(node >= 0 && node < mesh_.num_nodes(), "node", "is out of range");
+  Require(dof >= 0 && dof < 3, "dof", "must be 0, 1 or 2");
+  prescribed_[node][dof] = true;
+  prescribed_velocity_m_s_[node][dof] = velocity_m_s;
+  velocities_m_s_[node][dof] = velocity_m_s;
+}
+
+void ExplicitSolver::Release(int node, int dof) {
+  Require(node >= 0 && node < mesh_.num_nodes(), "node", "is out of range");
+  Require(dof >= 0 && dof < 3, "dof", "must be 0, 1 or 2");
+  prescribed_[node][dof] = false;
+}
+
+StepStatus ExplicitSolver::ComputeInternalForces() {
+  const int ne = mesh_.num_elements();
+  // 1. Deformation gradients at x_n and the increments since the last committed step.
+  bool inverted = false;
+#pragma omp parallel for schedule(static) num_threads(options_.threads) reduction(|| : inverted)
+  for (int e = 0; e < ne; ++e) {
+    std::array<Vec3, 8> x;
+    for (int a = 0; a < 8; ++a) x[a] = positions_m_[mesh_.elements[e][a]];
+    trial_f_[e] = DeformationGradient(x, references_[e].gradients_per_m);
+    if (!(trial_f_[e].determinant() > 0)) inverted = true;
+    increments_[e].displacement_gradient_increment =
+        trial_f_[e] * previous_f_[e].inverse() - Eigen::Matrix3d::Identity();
+    increments_[e].committed = states_[e].get();
+  }
+  if (inverted) return {false, "an element turned inside out (det F <= 0): the mesh is too "
+                               "distorted or the time step too large"};
+
+  // 2. The material answers for the whole mesh in one batch.
+  std::vector<material::PointResponse> responses = model_->Update(increments_, false);
+  for (int e = 0; e < ne; ++e) {
+    if (responses[e].status != material::UpdateStatus::kOk) {
+      return {false, "element " + std::to_string(e) + ": " + responses[e].reason};
+    }
+  }
+
+  // 3. Commit, and the element forces: f_a = V_0 P b_a with P = F S = J sigma F^-T, plus the
+  //    hourglass forces f_a += kappa gamma_alpha,a q_alpha, q_alpha = sum_b gamma_alpha,b u_b.
+#pragma omp parallel for schedule(static) num_threads(options_.threads)
+  for (int e = 0; e < ne; ++e) {
+    states_[e] = std::move(responses[e].state);
+    stress_pa_[e] = responses[e].stress_pa;
+    previous_f_[e] = trial_f_[e];
+    const Hex8Reference& r = references_[e];
+    const Eigen::Matrix3d& f = trial_f_[e];
+    const Eigen::Matrix3d first_pk = f.determinant() * stress_pa_[e] * f.inverse().transpose();
+    Mat83 forces = r.gradients_per_m * first_pk.transpose() * r.volume_m3;
+    if (hourglass_stiffness_n_m_[e] > 0) {
+      Mat83 displacements;
+      for (int a = 0; a < 8; ++a) {
+        const int node = mesh_.elements[e][a];
+        displacements.row(a) = (positions_m_[node] - mesh_.reference_positions_m[node]).transpose();
+      }
+      const Eigen::Matrix<double, 4, 3> modes = r.hourglass_vectors * displacements;
+      forces += hourglass_stiffness_n_m_[e] * r.hourglass_vectors.transpose() * modes;
+    }
+    element_forces_n_[e] = forces;
+  }
+
+  // 4. Gather per node in a fixed order, so the sum does not depend on the thread count.
+  const int nn = mesh_.num_nodes();
+#pragma omp parallel for schedule(static) num_threads(options_.threads)
+  for (int n = 0; n < nn; ++n) {
+    Vec3 sum = Vec3::Zero();
+    for (int k = node_element_offsets_[n]; k < node_element_offsets_[n + 1]; ++k) {
+      const int slot = node_element_slots_[k];
+      sum += element_forces_n_[slot / 8].row(slot % 8).transpose();
+    }
+    internal_forces_n_[n] = sum;
+  }
+  return {};
+}
+
+StepStatus ExplicitSolver::Step(double dt_s) {
+  Require(dt_s > 0 && std::isfinite(dt_s), "dt_s", "must be positive");
+  StepStatus status = ComputeInternalForces();
+  if (!status.ok) return status;
+  // Central differences (Belytschko, Liu & Moran 2000, Box 6.1) with mass-proportional damping
+  // taken at the mid-step velocity:
+  //   v_{n+1/2} = ((1 - alpha dt/2) v_{n-1/2} + dt a_n) / (1 + alpha dt/2),  x_{n+1} = x_n + dt v.
+  const double damping = 0.5 * options_.mass_damping_per_s * dt_s;
+  const int nn = mesh_.num_nodes();
+#pragma omp parallel for schedule(static) num_threads(options_.threads)
+  for (int n = 0; n < nn; ++n) {
+    const Vec3 force = external_forces_n_[n] + nodal_masses_kg_[n] * options_.gravity_m_s2 -
+                       internal_forces_n_[n];
+    Vec3 v = ((1 - damping) * velocities_m_s_[n] + dt_s * force / nodal_masses_kg_[n]) /
+             (1 + damping);
+    for (int d = 0; d < 3; ++d) {
+      if (prescribed_[n][d]) v[d] = prescribed_velocity_m_s_[n][d];
+    }
+    velocities_m_s_[n] = v;
+    positions_m_[n] += dt_s * v;
+  }
+  time_s_ += dt_s;
+  return {};
+}
+
+double ExplicitSolver::KineticEnergyJ() const {
+  double energy = 0;
+  for (int n = 0; n < mesh_.num_nodes(); ++n) {
+    energy += 0.5 * nodal_masses_kg_[n] * velocities_m_s_[n].squaredNorm();
+  }
+  return energy;
+}
+
+}  // namespace gonogo::fe

@@ -1,0 +1,52 @@
+// The "fe-classic" traction tier: one rigid wheel driven through the drawbar-pull procedure of
+// seed 001 section 6.3 (solvers/rig/wheel_rig.h) on an explicit FE soil bin closed by a
+// Drucker-Prager soil (solvers/fe, solvers/material). The rung below fe-de and fe-ann, whose
+// closures replace the return map behind the same seam (ARCHITECTURE sections 1 and 4).
+//
+// Soil: request.soil.soil_name, a row of the fe-classic soil library (data/fe_soils.csv);
+// explicit Bekker parameters and the cone index are not read. Tyre: a rigid wheel of radius d/2
+// and width b (section height, deflection and inflation pressure are not used). A curve costs
+// minutes on one core at the default resolution (README "Figures").
+//
+// Throws InputError("soil") for an unknown soil, the fields of TractionRequest::Validate;
+// returns an immobile curve when the wheel sinks to its axle; throws std::runtime_error when the
+// FE mesh fails. Thread-safe; each call builds its own mesh.
+#pragma once
+
+#include <string>
+
+#include "solvers/common/tier.h"
+#include "solvers/rig/fe_soils.h"
+#include "solvers/rig/wheel_rig.h"
+
+namespace gonogo::rig {
+
+struct FeClassicOptions {
+  double elements_per_radius = 6;  // resolution of the soil bin along the wheel path
+  int threads = 1;                 // OpenMP threads of one curve
+};
+
+class FeClassicTier : public TractionTier {
+ public:
+  FeClassicTier() : FeClassicTier(FeSoilLibrary::Builtin(), FeClassicOptions{}) {}
+  FeClassicTier(FeSoilLibrary library, FeClassicOptions options)
+      : library_(std::move(library)), options_(options) {}
+
+  std::string Name() const override { return "fe-classic"; }
+  std::string Version() const override { return "fe-classic-1"; }
+  bool UsesConeIndex() const override { return false; }
+  bool UsesSoilName() const override { return true; }
+  void ValidateSoil(const SoilState& soil, const std::string& field) const override;
+  TractionCurve Compute(const TractionRequest& request) const override;
+  // Polls `cancelled` every 200 time steps and throws CancelledError once it returns true.
+  TractionCurve Compute(const TractionRequest& request,
+                        const CancelCheck& cancelled) const override;
+
+  const FeSoil& ResolveSoil(const SoilState& soil, const std::string& field) const;
+
+ private:
+  FeSoilLibrary library_;
+  FeClassicOptions options_;
+};
+
+}  // namespace gonogo::rig

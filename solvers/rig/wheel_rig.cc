@@ -1,0 +1,341 @@
+#include "solvers/rig/wheel_rig.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+
+#include "solvers/common/errors.h"
+#include "solvers/fe/explicit_solver.h"
+#include "solvers/fe/mesh.h"
+#include "solvers/material/drucker_prager.h"
+#include "solvers/rig/wheel_contact.h"
+
+namespace gonogo::rig {
+namespace {
+
+constexpr double kGravity = 9.81;
+constexpr double kPi = 3.14159265358979323846;
+
+// Wheel kinematics and load against time for both procedures.
+struct Schedule {
+  DrawbarPullProcedure procedure;
+  double radius_m = 0;
+  double constant_slip = -1;  // < 0: the slip ramp of phase 4
+  double hold_s = 0;
+
+  double RollingStart() const { return procedure.gravity_settle_s + procedure.load_settle_s; }
+  double RampStart() const { return RollingStart() + procedure.self_propelled_s; }
+  double Duration() const {
+    return RampStart() + (constant_slip < 0 ? procedure.slip_ramp_s : hold_s);
+  }
+  double AngularSpeed() const { return procedure.angular_speed_rad_s; }
+
+  struct State {
+    int phase = 1;
+    double forward_speed_m_s = 0;
+    double angular_speed_rad_s = 0;
+    double load_fraction = 0;  // of W applied at the hub
+  };
+
+  State At(double t) const {
+    State s;
+    const double v0 = procedure.angular_speed_rad_s * radius_m;
+    if (t < procedure.gravity_settle_s) return s;
+    // The load comes on smoothly over the first half of the load settle, then holds.
+    s.load_fraction = std::min(1.0, (t - procedure.gravity_settle_s) / (0.5 * procedure.load_settle_s));
+    s.load_fraction = 0.5 - 0.5 * std::cos(kPi * s.load_fraction);
+    if (t < RollingStart()) {
+      s.phase = 2;
+      return s;
+    }
+    s.load_fraction = 1;
+    if (t < RampStart()) {
+      s.phase = 3;
+      const double up = std::min(1.0, (t - RollingStart()) / procedure.speed_ramp_up_s);
+      s.forward_speed_m_s = v0 * (0.5 - 0.5 * std::cos(kPi * up));
+      s.angular_speed_rad_s = s.forward_speed_m_s / radius_m;  // slip 0
+      return s;
+    }
+    s.angular_speed_rad_s = AngularSpeed();
+    if (constant_slip >= 0) {
+      s.phase = 5;
+      s.forward_speed_m_s = (1 - constant_slip) * v0;
+    } else {
+      s.phase = 4;
+      s.forward_speed_m_s = v0 * std::max(0.0, 1 - (t - RampStart()) / procedure.slip_ramp_s);
+    }
+    return s;
+  }
+
+  double Travel() const {
+    double travel = 0;
+    const double dt = 1e-3;
+    for (double t = 0; t < Duration(); t += dt) travel += At(t).forward_speed_m_s * dt;
+    return travel;
+  }
+};
+
+struct SampleSums {
+  int count = 0;
+  RigSample sum;
+  void Add(const RigSample& s) {
+    ++count;
+    sum.slip += s.slip;
+    sum.forward_speed_m_s += s.forward_speed_m_s;
+    sum.angular_speed_rad_s += s.angular_speed_rad_s;
+    sum.drawbar_pull_n += s.drawbar_pull_n;
+    sum.torque_nm += s.torque_nm;
+    sum.vertical_force_n += s.vertical_force_n;
+    sum.sinkage_m += s.sinkage_m;
+  }
+  RigSample Mean(double time_s, int phase) const {
+    RigSample m = sum;
+    const double k = 1.0 / count;
+    m.time_s = time_s;
+    m.phase = phase;
+    m.slip *= k;
+    m.forward_speed_m_s *= k;
+    m.angular_speed_rad_s *= k;
+    m.drawbar_pull_n *= k;
+    m.torque_nm *= k;
+    m.vertical_force_n *= k;
+    m.sinkage_m *= k;
+    return m;
+  }
+};
+
+RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& schedule,
+                const RigOptions& options) {
+  soil.Validate("soil.");
+  wheel.Validate("wheel.");
+  schedule.procedure.Validate("procedure.");
+  options.Validate("rig.");
+  const double radius = wheel.radius_m;
+  const double h =
+      options.element_size_m > 0 ? options.element_size_m : radius / options.elements_per_radius;
+
+  // The soil bin: room for the whole run plus 1.5 R at either end, soil flowing sideways and a
+  // pressure bulb of a few widths below the wheel.
+  fe::SoilBinSpec bin;
+  const double start_x = 1.5 * radius;
+  bin.length_m = start_x + schedule.Travel() + 1.5 * radius;
+  bin.width_m = 2 * (0.5 * wheel.width_m + std::max(2 * wheel.width_m, 0.6 * radius));
+  bin.depth_m = std::max(3 * wheel.width_m, radius);
+  bin.element_size_m = h;
+  bin.path_half_width_m = std::min(0.5 * wheel.width_m + h, 0.5 * bin.width_m);
+  bin.fine_depth_m = std::min(std::max(wheel.width_m, 2 * h), bin.depth_m);
+  bin.half_symmetric = true;
+  fe::HexMesh mesh = fe::MeshSoilBin(bin);
+
+  auto model = std::make_shared<material::DruckerPrager>(soil.strength);
+  const material::ElasticModuli moduli = model->InitialElasticModuli();
+  const double p_wave_modulus_pa = moduli.bulk_pa + 4.0 / 3.0 * moduli.shear_pa;
+  const double wave_speed_m_s = std::sqrt(p_wave_modulus_pa / soil.density_kg_m3);
+  // Settling damps the bin's first vertical mode critically: omega_1 = pi c / (2 depth).
+  const double settle_damping_per_s = 2 * kPi * wave_speed_m_s / (2 * bin.depth_m);
+
+  fe::ExplicitOptions fe_options;
+  fe_options.density_kg_m3 = soil.density_kg_m3;
+  fe_options.hourglass_coefficient = options.hourglass_coefficient;
+  fe_options.time_step_safety = options.time_step_safety;
+  fe_options.mass_damping_per_s = settle_damping_per_s;
+  fe_options.threads = options.threads;
+  fe::ExplicitSolver solver(std::move(mesh), model, fe_options);
+  const fe::HexMesh& m = solver.mesh();
+
+  // Floor fixed; end walls and the far side wall on rollers; y = 0 is the symmetry plane.
+  for (int n : m.NodesOnPlane(2, -bin.depth_m)) {
+    for (int d = 0; d < 3; ++d) solver.PrescribeVelocity(n, d);
+  }
+  for (int n : m.NodesOnPlane(0, 0)) solver.PrescribeVelocity(n, 0);
+  for (int n : m.NodesOnPlane(0, bin.length_m)) solver.PrescribeVelocity(n, 0);
+  for (int n : m.NodesOnPlane(1, 0)) solver.PrescribeVelocity(n, 1);
+  for (int n : m.NodesOnPlane(1, 0.5 * bin.width_m)) solver.PrescribeVelocity(n, 1);
+
+  // Penalty stiffness of the order of the soil's own nodal stiffness, (K + 4G/3) h: sinkage error
+  // p h / (K + 4G/3) stays far below the element size, and the node's frequency at most doubles.
+  std::vector<int> surface;
+  std::vector<double> areas;
+  TopSurfaceNodes(m, &surface, &areas);
+  WheelContactParams contact;
+  contact.radius_m = radius;
+  contact.width_m = wheel.width_m;
+  contact.friction_coefficient = std::tan(soil.strength.friction_angle_deg * kPi / 180);
+  contact.adhesion_pa = soil.strength.cohesion_pa;
+  contact.normal_stiffness_n_m = p_wave_modulus_pa * h;
+  contact.tangential_stiffness_n_m = contact.normal_stiffness_n_m;
+  double lightest_surface_node_kg = std::numeric_limits<double>::infinity();
+  for (int n : surface) {
+    lightest_surface_node_kg = std::min(lightest_surface_node_kg, solver.nodal_masses_kg()[n]);
+  }
+  WheelContact wheel_contact(contact, surface, areas);
+  const double contact_step_s =
+      options.time_step_safety * 2 *
+      std::sqrt(lightest_surface_node_kg /
+                (contact.normal_stiffness_n_m + contact.tangential_stiffness_n_m +
+                 p_wave_modulus_pa * h));
+  const double dt = std::min(solver.StableTimeStep(), contact_step_s);
+
+  RigRun run;
+  run.elements = m.num_elements();
+  run.nodes = m.num_nodes();
+  run.element_size_m = h;
+  run.time_step_s = dt;
+  const int steps = static_cast<int>(std::ceil(schedule.Duration() / dt));
+  run.steps = steps;
+  const int sample_every = std::max(1, static_cast<int>(std::lround(0.005 / dt)));
+
+  // The hub: half the wheel's load and mass on the half model, free vertically, with numerical
+  // damping c = m / tau on its vertical speed (tau 10 ms settling, 50 ms rolling).
+  const double half_load_n = 0.5 * wheel.load_n;
+  const double half_mass_kg = half_load_n / kGravity;
+  double hub_z_m = radius;  // touching the undisturbed surface
+  double hub_vz_m_s = 0;
+  double hub_x_m = start_x;
+  SampleSums sums;
+  for (int step = 0; step < steps; ++step) {
+    const double t = solver.time_s();
+    const Schedule::State state = schedule.At(t);
+    solver.set_mass_damping_per_s(state.phase <= 2 ? settle_damping_per_s
+                                                   : options.rolling_damping_per_s);
+    auto& f_ext = solver.external_forces_n();
+    for (int n : surface) f_ext[n].setZero();
+    WheelMotion motion;
+    motion.centre_m = Vec3(hub_x_m, 0, hub_z_m);
+    motion.velocity_m_s = Vec3(state.forward_speed_m_s, 0, hub_vz_m_s);
+    motion.angular_velocity_rad_s = state.angular_speed_rad_s;
+    const WheelLoad load = wheel_contact.Apply(motion, solver, dt);
+    const fe::StepStatus status = solver.Step(dt);
+    if (!status.ok) {
+      throw std::runtime_error("fe-classic rig: the soil mesh failed at t = " +
+                               std::to_string(t) + " s (phase " + std::to_string(state.phase) +
+                               "): " + status.reason);
+    }
+    const double tau_s = state.phase <= 2 ? 0.01 : 0.05;
+    const double hub_az = (load.force_n.z() - state.load_fraction * half_load_n) / half_mass_kg -
+                          hub_vz_m_s / tau_s;
+    hub_vz_m_s += dt * hub_az;
+    hub_z_m += dt * hub_vz_m_s;
+    hub_x_m += dt * state.forward_speed_m_s;
+
+    RigSample sample;
+    sample.slip = state.phase >= 3 && state.angular_speed_rad_s > 0
+                      ? 1 - state.forward_speed_m_s / (state.angular_speed_rad_s * radius)
+                      : 0;
+    sample.forward_speed_m_s = state.forward_speed_m_s;
+    sample.angular_speed_rad_s = state.angular_speed_rad_s;
+    sample.drawbar_pull_n = 2 * load.force_n.x();
+    sample.torque_nm = -2 * load.moment_y_nm;
+    sample.vertical_force_n = 2 * load.force_n.z();
+    sample.sinkage_m = radius - hub_z_m;
+    sums.Add(sample);
+    if (sample.sinkage_m >= 0.9 * radius) {
+      throw CannotCarryError("wheel_load_n",
+                             "the wheel sank to its axle in the fe-classic soil (sinkage " +
+                                 std::to_string(sample.sinkage_m) + " m at slip " +
+                                 std::to_string(sample.slip) + ")");
+    }
+    const Schedule::State next = schedule.At(solver.time_s());
+    if (sums.count == sample_every || next.phase != state.phase || step + 1 == steps) {
+      run.samples.push_back(sums.Mean(solver.time_s(), state.phase));
+      sums = SampleSums();
+    }
+    if (step % 200 == 0) {
+      if (options.cancelled && options.cancelled()) throw CancelledError();
+      if (options.progress) options.progress(static_cast<double>(step) / steps);
+    }
+  }
+  if (options.progress) options.progress(1.0);
+  return run;
+}
+
+}  // namespace
+
+void RigWheel::Validate(const std::string& p) const {
+  Require(radius_m > 0 && std::isfinite(radius_m), p + "radius_m", "must be positive");
+  Require(width_m > 0 && std::isfinite(width_m), p + "width_m", "must be positive");
+  Require(load_n > 0 && std::isfinite(load_n), p + "load_n", "must be positive");
+}
+
+void DrawbarPullProcedure::Validate(const std::string& p) const {
+  Require(gravity_settle_s > 0, p + "gravity_settle_s", "must be positive");
+  Require(load_settle_s > 0, p + "load_settle_s", "must be positive");
+  Require(self_propelled_s > 0, p + "self_propelled_s", "must be positive");
+  Require(slip_ramp_s > 0, p + "slip_ramp_s", "must be positive");
+  Require(speed_ramp_up_s > 0 && speed_ramp_up_s <= self_propelled_s, p + "speed_ramp_up_s",
+          "must be positive and within the self-propelled phase");
+  Require(angular_speed_rad_s > 0, p + "angular_speed_rad_s", "must be positive");
+}
+
+void RigOptions::Validate(const std::string& p) const {
+  Require(element_size_m >= 0, p + "element_size_m", "must not be negative");
+  Require(elements_per_radius >= 2, p + "elements_per_radius", "must be at least 2");
+  Require(rolling_damping_per_s >= 0, p + "rolling_damping_per_s", "must not be negative");
+  Require(threads >= 1, p + "threads", "must be at least 1");
+}
+
+RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+                          const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  Schedule schedule;
+  schedule.procedure = procedure;
+  schedule.radius_m = wheel.radius_m;
+  return Simulate(soil, wheel, schedule, options);
+}
+
+RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
+                           const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  Require(slip >= 0 && slip < 1, "slip", "must lie in [0, 1)");
+  Require(hold_s > 0, "hold_s", "must be positive");
+  Schedule schedule;
+  schedule.procedure = procedure;
+  schedule.radius_m = wheel.radius_m;
+  schedule.constant_slip = slip;
+  schedule.hold_s = hold_s;
+  return Simulate(soil, wheel, schedule, options);
+}
+
+std::vector<TractionPoint> CurveFromRun(const RigRun& run, const std::vector<double>& slips,
+                                        double radius_m) {
+  double spacing = 0;
+  for (size_t k = 1; k < slips.size(); ++k) spacing = std::max(spacing, slips[k] - slips[k - 1]);
+  const double half_window = 0.5 * std::max(0.05, spacing);
+  double self_propelled_end = 0, self_propelled_start = 0;
+  for (const RigSample& s : run.samples) {
+    if (s.phase == 3) {
+      if (self_propelled_start == 0) self_propelled_start = s.time_s;
+      self_propelled_end = s.time_s;
+    }
+  }
+  const double self_propelled_middle = 0.5 * (self_propelled_start + self_propelled_end);
+  std::vector<TractionPoint> points;
+  for (double slip : slips) {
+    double d = 0, t = 0, z = 0;
+    int count = 0;
+    for (const RigSample& s : run.samples) {
+      const bool in_ramp = s.phase == 4 && std::abs(s.slip - slip) <= half_window;
+      const bool at_rest_slip = slip == 0 && s.phase == 3 && s.time_s > self_propelled_middle;
+      if (!in_ramp && !at_rest_slip) continue;
+      d += s.drawbar_pull_n;
+      t += s.torque_nm;
+      z += s.sinkage_m;
+      ++count;
+    }
+    Require(count > 0, "slips", "a slip has no samples in the run (was it a drawbar-pull run?)");
+    TractionPoint p;
+    p.slip = slip;
+    p.drawbar_pull_n = d / count;
+    p.torque_nm = t / count;
+    p.sinkage_m = z / count;
+    p.gross_traction_n = p.torque_nm / radius_m;
+    p.motion_resistance_n = p.gross_traction_n - p.drawbar_pull_n;
+    p.tractive_efficiency = p.drawbar_pull_n > 0 && p.torque_nm > 0
+                                ? p.drawbar_pull_n * (1 - slip) / p.gross_traction_n
+                                : 0;
+    points.push_back(p);
+  }
+  return points;
+}
+
+}  // namespace gonogo::rig

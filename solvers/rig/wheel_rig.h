@@ -1,0 +1,98 @@
+// The single-wheel test rig on an FE soil bin: the drawbar-pull procedure of seed 001 section 6.3
+// and a constant-slip mode, both giving a TractionCurve.
+//
+// Procedure (seed 001, section 6.3; figures for its full-scale tyre):
+//   1. gravity settle: the soil bin comes to rest under its own weight (heavily damped);
+//   2. load settle: the wheel's normal load W is applied at the hub and the wheel sinks to rest;
+//   3. self-propelled: angular speed omega (5.47 rad/s, 52.26 rpm) and forward speed V_0 = omega R
+//      (2.76 m/s for the seed's 0.505 m rolling radius), slip 0, for 0.5 s (brought up smoothly
+//      over the first 0.1 s);
+//   4. slip ramp: omega held, V falls linearly to 0 over 2 s, so slip s = 1 - V / (omega R) runs
+//      from 0 to 1.
+// The seed gives omega and V_0 for its full-scale tyre only; the rig keeps omega for every wheel,
+// so the distance run, 1.5 omega R, and with it the soil bin, scale with the wheel.
+// The wheel is rigid (radius R = d / 2 of the tyre), moves on prescribed forward and angular speed,
+// and is free vertically under W. Only the half y >= 0 is meshed (symmetry plane y = 0), and forces
+// are doubled.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solvers/common/tier.h"
+#include "solvers/common/traction.h"
+#include "solvers/rig/fe_soils.h"
+
+namespace gonogo::rig {
+
+struct RigWheel {
+  double radius_m = 0;
+  double width_m = 0;
+  double load_n = 0;  // W
+  void Validate(const std::string& field_prefix) const;
+};
+
+struct DrawbarPullProcedure {
+  double gravity_settle_s = 0.15;
+  double load_settle_s = 0.3;
+  double self_propelled_s = 0.5;     // seed 001: 0.5 s
+  double slip_ramp_s = 2.0;          // seed 001: 2 s
+  double speed_ramp_up_s = 0.1;      // inside the self-propelled phase
+  double angular_speed_rad_s = 5.47;  // seed 001: 52.26 rpm
+  void Validate(const std::string& field_prefix) const;
+};
+
+struct RigOptions {
+  double element_size_m = 0;       // near the wheel path; 0: radius / elements_per_radius
+  double elements_per_radius = 6;
+  double hourglass_coefficient = 0.05;
+  double rolling_damping_per_s = 2;  // soil mass damping once the wheel rolls, 1/s
+  double time_step_safety = 0.5;
+  int threads = 1;
+  // Called now and then with the fraction of simulated time done.
+  std::function<void(double fraction)> progress;
+  CancelCheck cancelled;  // polled every 200 steps; CancelledError once it returns true
+  void Validate(const std::string& field_prefix) const;
+};
+
+// One record per output interval (every step is too many).
+struct RigSample {
+  double time_s = 0;
+  int phase = 0;                 // 1..4 as in the procedure; 5 for constant slip
+  double slip = 0;               // 1 - V / (omega R); 0 while settling
+  double forward_speed_m_s = 0;
+  double angular_speed_rad_s = 0;
+  double drawbar_pull_n = 0;     // soil force on the wheel along +x (whole wheel)
+  double torque_nm = 0;          // torque the drive must supply
+  double vertical_force_n = 0;   // soil force on the wheel along +z (whole wheel)
+  double sinkage_m = 0;          // depth of the wheel's lowest point below the undisturbed surface
+};
+
+struct RigRun {
+  std::vector<RigSample> samples;
+  int elements = 0;
+  int nodes = 0;
+  double element_size_m = 0;
+  double time_step_s = 0;
+  int steps = 0;
+};
+
+// Runs the procedure. Throws InputError for bad parameters, CannotCarryError when the wheel sinks
+// to its axle while settling, std::runtime_error when the mesh fails (an element turns inside
+// out), CancelledError when cancelled.
+RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+                          const DrawbarPullProcedure& procedure, const RigOptions& options);
+
+// Phases 1-3, then the slip fixed at `slip` (omega held, V = (1 - s) omega R) for `hold_s`.
+RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
+                           const DrawbarPullProcedure& procedure, const RigOptions& options);
+
+// The traction curve at `slips` from a drawbar-pull run. Filtering: each requested slip s_k is the
+// mean of the ramp samples with |s - s_k| <= w/2, w = max(0.05, spacing of the slips); s = 0 also
+// takes the second half of the self-propelled phase. Torque gives gross traction T / R, motion
+// resistance T / R - D and efficiency D (1 - s) R / T (0 where D <= 0).
+std::vector<TractionPoint> CurveFromRun(const RigRun& run, const std::vector<double>& slips,
+                                        double radius_m);
+
+}  // namespace gonogo::rig

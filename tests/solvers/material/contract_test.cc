@@ -1,0 +1,273 @@
+// The contract of solvers/material/constitutive.h, checked on every model that
+// RegisterBuiltinMaterials registers, built from its example parameters. Each check runs from
+// four states reached by a fixed sequence of increments: fresh; compressed and sheared (elastic
+// for the example parameters); on the Drucker-Prager cone after isochoric axial compression; at
+// the Drucker-Prager apex after isotropic extension (for linear-elastic the last two are elastic
+// states too).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solvers/common/errors.h"
+#include "solvers/material/constitutive.h"
+#include "solvers/material/kinematics.h"
+#include "solvers/material/linear_elastic.h"
+#include "solvers/material/registry.h"
+
+namespace gonogo::material {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<std::string> BuiltinNames() {
+  MaterialRegistry registry;
+  RegisterBuiltinMaterials(registry);
+  return registry.Names();
+}
+
+Matrix3 StrainFromVoigt(double xx, double yy, double zz, double yz, double xz, double xy) {
+  Vector6 voigt;
+  voigt << xx, yy, zz, yz, xz, xy;
+  return VoigtToStrain(voigt);
+}
+
+bool SameBits(const Eigen::Ref<const Eigen::MatrixXd>& a,
+              const Eigen::Ref<const Eigen::MatrixXd>& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+// A committed state, its stress, and the strain increment (Hughes-Winget d_eps) that continues
+// the path that reached it.
+struct PathPoint {
+  std::string label;
+  std::unique_ptr<MaterialState> state;
+  Matrix3 stress_pa;
+  Matrix3 next_strain;
+};
+
+class MaterialContractTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    RegisterBuiltinMaterials(registry_);
+    const ModelEntry& entry = registry_.Get(GetParam());
+    model_ = entry.make(entry.example_parameters);
+    young_pa_ = entry.example_parameters.at("young_pa");
+    poisson_ = entry.example_parameters.at("poisson");
+    BuildPath();
+  }
+
+  PointResponse Apply(const MaterialState& committed, const Matrix3& displacement_gradient,
+                      bool want_tangent) const {
+    std::vector<PointIncrement> one(1);
+    one[0].displacement_gradient_increment = displacement_gradient;
+    one[0].committed = &committed;
+    std::vector<PointResponse> responses = model_->Update(one, want_tangent);
+    EXPECT_EQ(responses.size(), 1u);
+    return std::move(responses[0]);
+  }
+
+  // Applies strain increments in turn (no rotation) and records the state reached.
+  PathPoint Walk(const std::string& label, const MaterialState& start,
+                 const std::vector<Matrix3>& strains, const Matrix3& next_strain) const {
+    PathPoint point{label, start.Clone(), Matrix3::Zero(), next_strain};
+    PointResponse response = Apply(*point.state, Matrix3::Zero(), false);  // the start's stress
+    point.stress_pa = response.stress_pa;
+    for (const Matrix3& strain : strains) {
+      response = Apply(*point.state, DisplacementGradientForStrain(strain), false);
+      EXPECT_EQ(response.status, UpdateStatus::kOk) << response.reason;
+      point.state = std::move(response.state);
+      point.stress_pa = response.stress_pa;
+    }
+    return point;
+  }
+
+  void BuildPath() {
+    const std::unique_ptr<MaterialState> fresh = model_->InitialState();
+    path_.push_back(
+        Walk("fresh", *fresh, {}, StrainFromVoigt(-2e-4, 1e-4, -1e-4, 5e-5, -3e-5, 4e-5)));
+    // Isotropic compression to p ~ -50 kPa and a small shear (elastic).
+    const Matrix3 compress = StrainFromVoigt(-5e-4, -5e-4, -5e-4, 2e-5, 0, 1e-4);
+    path_.push_back(Walk("prestressed", *fresh, {compress, compress},
+                         StrainFromVoigt(-2e-4, 1e-4, -1e-4, 5e-5, -3e-5, 4e-5)));
+    // Isochoric axial compression from there: on the cone after about four steps.
+    const Matrix3 axial = StrainFromVoigt(5e-4, 5e-4, -1e-3, 0, 0, 0);
+    path_.push_back(Walk("cone", *path_[1].state, std::vector<Matrix3>(6, axial),
+                         StrainFromVoigt(5e-4, 4e-4, -1e-3, 2e-5, -1e-5, 3e-5)));
+    // Isotropic extension: p_trial = 50 kPa beyond the apex p = xi c / eta ~ 17 kPa.
+    path_.push_back(Walk("apex", *fresh, {StrainFromVoigt(1e-3, 1e-3, 1e-3, 0, 0, 0)},
+                         StrainFromVoigt(1e-4, 1e-4, 1e-4, 1e-5, 0, 0)));
+  }
+
+  // A stress to measure errors against where the stress itself may be zero.
+  double StressScale(const Matrix3& stress) const {
+    return std::max(stress.norm(), 1e-3 * young_pa_);
+  }
+
+  MaterialRegistry registry_;
+  std::unique_ptr<ConstitutiveModel> model_;
+  double young_pa_ = 0;
+  double poisson_ = 0;
+  std::vector<PathPoint> path_;
+};
+
+// (a) The tangent is d sigma / d eps (Voigt, engineering shears) of the update it comes with.
+TEST_P(MaterialContractTest, TangentMatchesCentralDifferences) {
+  const Voigt6x6 elastic = Apply(*path_[0].state, Matrix3::Zero(), true).tangent_pa;  // fresh point
+  for (const PathPoint& point : path_) {
+    SCOPED_TRACE(point.label);
+    const PointResponse base =
+        Apply(*point.state, DisplacementGradientForStrain(point.next_strain), true);
+    ASSERT_EQ(base.status, UpdateStatus::kOk) << base.reason;
+    ASSERT_TRUE(base.has_tangent);
+    const Vector6 strain = StrainToVoigt(point.next_strain);
+    const double step = 1e-7;
+    Voigt6x6 differences;
+    for (int j = 0; j < 6; ++j) {
+      Vector6 plus = strain, minus = strain;
+      plus(j) += step;
+      minus(j) -= step;
+      const PointResponse up =
+          Apply(*point.state, DisplacementGradientForStrain(VoigtToStrain(plus)), false);
+      const PointResponse down =
+          Apply(*point.state, DisplacementGradientForStrain(VoigtToStrain(minus)), false);
+      differences.col(j) =
+          (StressToVoigt(up.stress_pa) - StressToVoigt(down.stress_pa)) / (2 * step);
+    }
+    const double scale = std::max(base.tangent_pa.norm(), young_pa_);
+    EXPECT_LT((differences - base.tangent_pa).norm(), 1e-5 * scale)
+        << "tangent\n"
+        << base.tangent_pa << "\ndifferences\n"
+        << differences;
+    // Drucker-Prager: the path must reach the plastic branches, or (a) would only test C.
+    if (GetParam() == "drucker-prager" && (point.label == "cone" || point.label == "apex")) {
+      EXPECT_GT((base.tangent_pa - elastic).norm(), 0.1 * elastic.norm());
+    }
+  }
+}
+
+// (b) A zero increment changes nothing, also through the state's bytes.
+TEST_P(MaterialContractTest, ZeroIncrementKeepsTheStress) {
+  for (const PathPoint& point : path_) {
+    SCOPED_TRACE(point.label);
+    const PointResponse response = Apply(*point.state, Matrix3::Zero(), false);
+    ASSERT_EQ(response.status, UpdateStatus::kOk) << response.reason;
+    const double tolerance = 1e-12 * std::max(point.stress_pa.norm(), 1.0);
+    EXPECT_LE((response.stress_pa - point.stress_pa).norm(), tolerance);
+    const std::unique_ptr<MaterialState> restored =
+        model_->RestoreState(response.state->Serialize());
+    const PointResponse again = Apply(*restored, Matrix3::Zero(), false);
+    EXPECT_LE((again.stress_pa - point.stress_pa).norm(), tolerance);
+  }
+}
+
+// (c) Objectivity: a rigid rotation increment I + dH = Q gives Q sigma Q^T.
+TEST_P(MaterialContractTest, RigidRotationRotatesTheStress) {
+  const Matrix3 rotation =
+      Eigen::AngleAxisd(30.0 * kPi / 180.0, Eigen::Vector3d(1, -2, 3).normalized())
+          .toRotationMatrix();
+  for (const PathPoint& point : path_) {
+    SCOPED_TRACE(point.label);
+    const PointResponse response = Apply(*point.state, rotation - Matrix3::Identity(), false);
+    ASSERT_EQ(response.status, UpdateStatus::kOk) << response.reason;
+    const Matrix3 expected = rotation * point.stress_pa * rotation.transpose();
+    EXPECT_LE((response.stress_pa - expected).norm(), 1e-10 * StressScale(expected))
+        << response.stress_pa << "\nexpected\n"
+        << expected;
+  }
+}
+
+// (d) A failed update returns a reason and no state, and leaves the committed state alone.
+TEST_P(MaterialContractTest, FailureLeavesTheCommittedStateUntouched) {
+  Matrix3 not_finite = Matrix3::Zero();
+  not_finite(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  const Matrix3 inverted = Eigen::Vector3d(-2.0, 0.0, 0.0).asDiagonal();   // det(I + dH) = -1
+  const Matrix3 flattened = Eigen::Vector3d(-1.0, 0.0, 0.0).asDiagonal();  // det(I + dH) = 0
+  for (const PathPoint& point : path_) {
+    SCOPED_TRACE(point.label);
+    const std::string before = point.state->Serialize();
+    for (const Matrix3& bad : {not_finite, inverted, flattened}) {
+      const PointResponse response = Apply(*point.state, bad, true);
+      EXPECT_EQ(response.status, UpdateStatus::kFailed);
+      EXPECT_FALSE(response.reason.empty());
+      EXPECT_EQ(response.state, nullptr);
+      EXPECT_EQ(point.state->Serialize(), before);
+    }
+  }
+  std::vector<PointIncrement> orphan(1);  // no committed state
+  const std::vector<PointResponse> responses = model_->Update(orphan, false);
+  EXPECT_EQ(responses[0].status, UpdateStatus::kFailed);
+  EXPECT_FALSE(responses[0].reason.empty());
+}
+
+// (e) Serialize / RestoreState reproduce the next update bit for bit; bad bytes are refused.
+TEST_P(MaterialContractTest, SerializeRestoreRoundTripIsExact) {
+  for (const PathPoint& point : path_) {
+    SCOPED_TRACE(point.label);
+    const std::string bytes = point.state->Serialize();
+    const std::unique_ptr<MaterialState> restored = model_->RestoreState(bytes);
+    EXPECT_EQ(restored->Serialize(), bytes);
+    const Matrix3 next = DisplacementGradientForStrain(point.next_strain);
+    const PointResponse original = Apply(*point.state, next, true);
+    const PointResponse replayed = Apply(*restored, next, true);
+    ASSERT_EQ(replayed.status, UpdateStatus::kOk);
+    EXPECT_TRUE(SameBits(original.stress_pa, replayed.stress_pa));
+    EXPECT_TRUE(SameBits(original.tangent_pa, replayed.tangent_pa));
+    EXPECT_EQ(original.state->Serialize(), replayed.state->Serialize());
+  }
+  EXPECT_THROW(model_->RestoreState("not a state"), InputError);
+  const std::string bytes = path_[1].state->Serialize();
+  EXPECT_THROW(model_->RestoreState(bytes.substr(0, bytes.size() - 1)), InputError);
+}
+
+// (f) One batch of 64 points gives the bits of 64 single calls.
+TEST_P(MaterialContractTest, BatchEqualsSingleCalls) {
+  const int count = 64;
+  std::vector<PointIncrement> batch(count);
+  for (int i = 0; i < count; ++i) {
+    const PathPoint& point = path_[i % path_.size()];
+    const Matrix3 spin = 1e-3 * i * (Matrix3() << 0, 1, 0, -1, 0, 2, 0, -2, 0).finished();
+    batch[i].displacement_gradient_increment =
+        DisplacementGradientForStrain((1.0 + 0.05 * i) * point.next_strain) + spin;
+    batch[i].committed = point.state.get();
+  }
+  const std::vector<PointResponse> together = model_->Update(batch, true);
+  ASSERT_EQ(together.size(), static_cast<size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    SCOPED_TRACE(i);
+    const PointResponse alone =
+        Apply(*batch[i].committed, batch[i].displacement_gradient_increment, true);
+    ASSERT_EQ(together[i].status, alone.status);
+    ASSERT_EQ(alone.status, UpdateStatus::kOk) << alone.reason;
+    EXPECT_TRUE(SameBits(together[i].stress_pa, alone.stress_pa));
+    EXPECT_TRUE(SameBits(together[i].tangent_pa, alone.tangent_pa));
+    EXPECT_EQ(together[i].state->Serialize(), alone.state->Serialize());
+  }
+}
+
+// (g) The moduli of a fresh point are those of its elastic constants.
+TEST_P(MaterialContractTest, InitialElasticModuliMatchTheElasticConstants) {
+  const ElasticModuli moduli = model_->InitialElasticModuli();
+  const double bulk = young_pa_ / (3 * (1 - 2 * poisson_));
+  const double shear = young_pa_ / (2 * (1 + poisson_));
+  EXPECT_NEAR(moduli.bulk_pa, bulk, 1e-12 * bulk);
+  EXPECT_NEAR(moduli.shear_pa, shear, 1e-12 * shear);
+}
+
+TEST_P(MaterialContractTest, NameIsTheRegisteredName) { EXPECT_EQ(model_->Name(), GetParam()); }
+
+INSTANTIATE_TEST_SUITE_P(Builtin, MaterialContractTest, ::testing::ValuesIn(BuiltinNames()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param;
+                           for (char& c : name) c = (c == '-') ? '_' : c;
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace gonogo::material

@@ -1,0 +1,152 @@
+// The single-wheel rig on the fe-classic soil: the invariants of a driven rigid wheel on soft
+// soil (Wong 2008, ch. 2.7; seed 001 Figs. 14-21): drawbar pull negative at zero slip (motion
+// resistance), rising with slip; torque and sinkage rising with load; the slip ramp agreeing with
+// a constant-slip run; a soil that cannot carry the wheel gives an immobile curve.
+#include "solvers/rig/wheel_rig.h"
+
+#include <gtest/gtest.h>
+
+#include "solvers/common/errors.h"
+#include "solvers/rig/fe_classic_tier.h"
+#include "solvers/rig/fe_soils.h"
+
+namespace gonogo::rig {
+namespace {
+
+// The 0.5-scale tyre of seed 001 Table 4 as a rigid wheel, on a coarse bin.
+RigWheel HalfScaleWheel(double load_factor = 1.0) { return {0.2525, 0.167, 3359 * load_factor}; }
+
+RigOptions Coarse() {
+  RigOptions o;
+  o.elements_per_radius = 4;
+  o.threads = 2;
+  return o;
+}
+
+const FeSoil& DrySand() { return *FeSoilLibrary::Builtin().Find("lll_dry_sand"); }
+
+double MeanOver(const std::vector<TractionPoint>& c, double from, double to,
+                double TractionPoint::*field) {
+  double sum = 0;
+  int n = 0;
+  for (const TractionPoint& p : c) {
+    if (p.slip >= from - 1e-9 && p.slip <= to + 1e-9) {
+      sum += p.*field;
+      ++n;
+    }
+  }
+  return sum / n;
+}
+
+class WheelRigTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    base_ = new RigRun(RunDrawbarPullTest(DrySand(), HalfScaleWheel(), {}, Coarse()));
+    heavy_ = new RigRun(RunDrawbarPullTest(DrySand(), HalfScaleWheel(1.5), {}, Coarse()));
+  }
+  static void TearDownTestSuite() {
+    delete base_;
+    delete heavy_;
+  }
+  static RigRun* base_;
+  static RigRun* heavy_;
+};
+RigRun* WheelRigTest::base_ = nullptr;
+RigRun* WheelRigTest::heavy_ = nullptr;
+
+TEST_F(WheelRigTest, DrawbarPullIsNegativeAtZeroSlipAndGrowsWithSlip) {
+  const double w = HalfScaleWheel().load_n;
+  const auto curve = CurveFromRun(*base_, TractionRequest::SlipSweep(0.1), 0.2525);
+  for (const TractionPoint& p : curve) {
+    std::printf("slip %.2f D/W %.3f T/(rW) %.3f z %.4f m\n", p.slip, p.drawbar_pull_n / w,
+                p.torque_nm / (0.2525 * w), p.sinkage_m);
+  }
+  // Zero slip: the wheel pays its motion resistance, T/r - D > 0, and pulls nothing.
+  EXPECT_LT(curve[0].drawbar_pull_n, 0.02 * w);
+  EXPECT_GT(curve[0].motion_resistance_n, 0.0);
+  // The usual range: drawbar pull rises from low to moderate slip.
+  const double low = MeanOver(curve, 0.0, 0.1, &TractionPoint::drawbar_pull_n);
+  const double mid = MeanOver(curve, 0.3, 0.5, &TractionPoint::drawbar_pull_n);
+  EXPECT_GT(mid, low + 0.05 * w);
+  // Sinkage is positive and well below the radius.
+  for (const TractionPoint& p : curve) {
+    EXPECT_GT(p.sinkage_m, 0.0);
+    EXPECT_LT(p.sinkage_m, 0.5 * 0.2525);
+  }
+}
+
+TEST_F(WheelRigTest, TorqueAndSinkageGrowWithLoad) {
+  const auto slips = TractionRequest::SlipSweep(0.1);
+  const auto light = CurveFromRun(*base_, slips, 0.2525);
+  const auto heavy = CurveFromRun(*heavy_, slips, 0.2525);
+  EXPECT_GT(MeanOver(heavy, 0.1, 0.6, &TractionPoint::torque_nm),
+            1.2 * MeanOver(light, 0.1, 0.6, &TractionPoint::torque_nm));
+  EXPECT_GT(MeanOver(heavy, 0.0, 0.6, &TractionPoint::sinkage_m),
+            1.1 * MeanOver(light, 0.0, 0.6, &TractionPoint::sinkage_m));
+}
+
+TEST_F(WheelRigTest, SlipRampAgreesWithAConstantSlipRun) {
+  const double slip = 0.3;
+  const RigRun held = RunConstantSlipTest(DrySand(), HalfScaleWheel(), slip, 0.6, {}, Coarse());
+  double d = 0;
+  int n = 0;
+  for (const RigSample& s : held.samples) {
+    if (s.phase == 5 && s.time_s > held.samples.back().time_s - 0.3) {
+      d += s.drawbar_pull_n;
+      ++n;
+    }
+  }
+  d /= n;
+  const double ramp = CurveFromRun(*base_, {slip}, 0.2525)[0].drawbar_pull_n;
+  std::printf("slip 0.3: constant-slip D %.0f N, ramp D %.0f N\n", d, ramp);
+  EXPECT_NEAR(d, ramp, 0.05 * HalfScaleWheel().load_n + 0.25 * std::abs(d));
+}
+
+TEST(FeClassicTierTest, NamesTheSoilItCannotResolve) {
+  FeClassicTier tier;
+  SoilState soil;
+  soil.soil_name = "no_such_soil";
+  try {
+    tier.ValidateSoil(soil, "soil");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "soil.soil_name");
+    EXPECT_NE(std::string(e.what()).find("lll_dry_sand"), std::string::npos) << e.what();
+  }
+  soil.soil_name = "lll_dry_sand";
+  EXPECT_NO_THROW(tier.ValidateSoil(soil, "soil"));
+  soil.bekker = BekkerParameters{};
+  EXPECT_THROW(tier.ValidateSoil(soil, "soil"), InputError);
+}
+
+TEST(FeClassicTierTest, ASoilThatCannotCarryTheWheelGivesAnImmobileCurve) {
+  FeClassicTier tier(FeSoilLibrary::Builtin(), FeClassicOptions{3, 2});
+  TractionRequest r;
+  r.soil.soil_name = "thailand_clayey_soil_38pct";
+  r.tyre.diameter_m = 0.505;
+  r.tyre.width_m = 0.167;
+  r.tyre.section_height_m = 0.1;
+  r.wheel_load_n = 60000;  // ~700 kPa under a small wheel on soft clay
+  r.slips = TractionRequest::SlipSweep(0.25);
+  const TractionCurve curve = tier.Compute(r);
+  EXPECT_TRUE(curve.points.empty());
+  EXPECT_NE(curve.immobile_reason.find("axle"), std::string::npos) << curve.immobile_reason;
+}
+
+TEST(FeSoilLibraryTest, ParsesTheBuiltinAndRejectsBadRows) {
+  const FeSoilLibrary& lib = FeSoilLibrary::Builtin();
+  ASSERT_NE(lib.Find("LETE_SAND"), nullptr);
+  EXPECT_DOUBLE_EQ(lib.Find("lete_sand")->strength.friction_angle_deg, 31.1);
+  const std::string header =
+      "name,density_kg_m3,young_pa,poisson,cohesion_pa,friction_angle_deg,dilation_angle_deg,"
+      "source\n";
+  try {
+    FeSoilLibrary::Parse(header + "x,1500,1e7,0.3,1000,95,0,somewhere\n");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("friction_angle_deg"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace gonogo::rig
