@@ -85,6 +85,23 @@ std::vector<double> GradedLines(double start_m, double end_m, double fine_size_m
   return lines;
 }
 
+std::vector<double> MirroredLines(const std::vector<double>& half_lines_m) {
+  std::vector<double> lines;
+  for (size_t k = half_lines_m.size() - 1; k > 0; --k) lines.push_back(-half_lines_m[k]);
+  lines.insert(lines.end(), half_lines_m.begin(), half_lines_m.end());
+  return lines;
+}
+
+std::vector<double> DepthLines(double depth_m, double fine_size_m, double fine_depth_m,
+                               double growth_ratio, double max_size_m) {
+  const std::vector<double> depth =
+      GradedLines(0, depth_m, fine_size_m, fine_depth_m, growth_ratio, max_size_m);
+  std::vector<double> lines;
+  for (auto it = depth.rbegin(); it != depth.rend(); ++it) lines.push_back(-*it);
+  lines.back() = 0.0;
+  return lines;
+}
+
 void SoilBinSpec::Validate(const std::string& p) const {
   Require(length_m > 0, p + "length_m", "must be positive");
   Require(width_m > 0, p + "width_m", "must be positive");
@@ -111,17 +128,10 @@ HexMesh MeshSoilBin(const SoilBinSpec& spec) {
   // y: fine across the path, graded to the side wall; mirrored when the full width is meshed.
   std::vector<double> y_half = GradedLines(0, 0.5 * spec.width_m, spec.element_size_m,
                                            spec.path_half_width_m, spec.growth_ratio, max_size);
-  std::vector<double> y_lines;
-  if (!spec.half_symmetric) {
-    for (size_t j = y_half.size() - 1; j > 0; --j) y_lines.push_back(-y_half[j]);
-  }
-  y_lines.insert(y_lines.end(), y_half.begin(), y_half.end());
-  // z: fine below the surface, graded towards the floor; lines run from the floor up.
-  std::vector<double> depth = GradedLines(0, spec.depth_m, spec.element_size_m, spec.fine_depth_m,
-                                          spec.growth_ratio, max_size);
-  std::vector<double> z_lines;
-  for (auto it = depth.rbegin(); it != depth.rend(); ++it) z_lines.push_back(-*it);
-  z_lines.back() = 0.0;
+  std::vector<double> y_lines = spec.half_symmetric ? y_half : MirroredLines(y_half);
+  // z: fine below the surface, graded towards the floor.
+  std::vector<double> z_lines = DepthLines(spec.depth_m, spec.element_size_m, spec.fine_depth_m,
+                                           spec.growth_ratio, max_size);
   return MeshBox(std::move(x_lines), std::move(y_lines), std::move(z_lines));
 }
 

@@ -44,6 +44,12 @@ HexMesh MeshBox(std::vector<double> x_lines_m, std::vector<double> y_lines_m,
 std::vector<double> GradedLines(double start_m, double end_m, double fine_size_m,
                                 double fine_extent_m, double growth_ratio, double max_size_m);
 
+// Lines -l_n .. -l_1, l_0 = 0, l_1 .. l_n from half-axis lines 0 = l_0 < l_1 < ... < l_n.
+std::vector<double> MirroredLines(const std::vector<double>& half_lines_m);
+// Vertical lines from -depth_m up to the surface z = 0, graded like GradedLines downwards.
+std::vector<double> DepthLines(double depth_m, double fine_size_m, double fine_depth_m,
+                               double growth_ratio, double max_size_m);
+
 // A soil bin for a wheel running along +x on the centre line y = 0. With `half_symmetric` only
 // y >= 0 is meshed and y = 0 is a symmetry plane (rollers in y), which halves the cost of a wheel
 // centred on the line.

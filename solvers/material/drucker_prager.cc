@@ -112,17 +112,13 @@ PointResponse DruckerPrager::UpdateOne(const PointIncrement& increment, bool wan
     response.reason = "committed state is missing or not a drucker-prager state";
     return response;
   }
-  const IncrementKinematics kinematics = HughesWinget(increment.displacement_gradient_increment);
-  if (!kinematics.ok()) {
-    response.reason = kinematics.failure_reason;
-    return response;
-  }
   // Objective rotation of the committed stress (Hughes & Winget 1980), then the elastic
   // predictor sigma_trial = R sigma_n R^T + C : d_eps (dSN Box 8.9, step 1).
-  const Matrix3& rotation = kinematics.rotation;
-  const Matrix3 rotated = rotation * committed->stress_pa() * rotation.transpose();
-  const Matrix3 trial = 0.5 * (rotated + rotated.transpose()) +
-                        IsotropicElasticStress(bulk_pa_, shear_pa_, kinematics.strain_increment);
+  Matrix3 trial;
+  if (!ElasticTrialStress(committed->stress_pa(), increment.displacement_gradient_increment,
+                          bulk_pa_, shear_pa_, &trial, &response.reason)) {
+    return response;
+  }
   const Returned returned = ReturnMap(trial, want_tangent);
   response.stress_pa = returned.stress_pa;
   if (want_tangent) {

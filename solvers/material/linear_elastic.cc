@@ -50,6 +50,21 @@ std::unique_ptr<MaterialState> LinearElastic::RestoreState(const std::string& by
   return std::make_unique<StressState>(VoigtToStress(Eigen::Map<const Vector6>(values.data())));
 }
 
+bool ElasticTrialStress(const Matrix3& committed_stress_pa,
+                        const Matrix3& displacement_gradient_increment, double bulk_pa,
+                        double shear_pa, Matrix3* trial_stress_pa, std::string* reason) {
+  const IncrementKinematics kinematics = HughesWinget(displacement_gradient_increment);
+  if (!kinematics.ok()) {
+    *reason = kinematics.failure_reason;
+    return false;
+  }
+  const Matrix3& rotation = kinematics.rotation;
+  const Matrix3 rotated = rotation * committed_stress_pa * rotation.transpose();
+  *trial_stress_pa = 0.5 * (rotated + rotated.transpose()) +
+                     IsotropicElasticStress(bulk_pa, shear_pa, kinematics.strain_increment);
+  return true;
+}
+
 std::vector<PointResponse> LinearElastic::Update(const std::vector<PointIncrement>& increments,
                                                  bool want_tangent) const {
   return UpdateEachPoint(increments, [this, want_tangent](const PointIncrement& increment) {
@@ -64,16 +79,11 @@ PointResponse LinearElastic::UpdateOne(const PointIncrement& increment, bool wan
     response.reason = "committed state is missing or not a linear-elastic state";
     return response;
   }
-  const IncrementKinematics kinematics = HughesWinget(increment.displacement_gradient_increment);
-  if (!kinematics.ok()) {
-    response.reason = kinematics.failure_reason;
+  // sigma_{n+1} = R sigma_n R^T + C : d_eps (Hughes & Winget 1980).
+  if (!ElasticTrialStress(committed->stress_pa(), increment.displacement_gradient_increment,
+                          bulk_pa_, shear_pa_, &response.stress_pa, &response.reason)) {
     return response;
   }
-  // sigma_{n+1} = R sigma_n R^T + C : d_eps (Hughes & Winget 1980); symmetrised against roundoff.
-  const Matrix3& rotation = kinematics.rotation;
-  const Matrix3 rotated = rotation * committed->stress_pa() * rotation.transpose();
-  response.stress_pa = 0.5 * (rotated + rotated.transpose()) +
-                       IsotropicElasticStress(bulk_pa_, shear_pa_, kinematics.strain_increment);
   if (want_tangent) {
     response.tangent_pa = IsotropicElasticTangent(bulk_pa_, shear_pa_);
     response.has_tangent = true;

@@ -28,6 +28,13 @@ Matrix3 IsotropicElasticStress(double bulk_pa, double shear_pa, const Matrix3& s
 // The same map as a 6 x 6 Voigt matrix (engineering shear strains).
 Voigt6x6 IsotropicElasticTangent(double bulk_pa, double shear_pa);
 
+// The hypoelastic predictor both classical models start from: R sigma_n R^T + C : d_eps with R
+// and d_eps of the Hughes-Winget kinematics of `displacement_gradient_increment` (symmetrised
+// against round-off). Returns false, with `reason` set, for an inadmissible increment.
+bool ElasticTrialStress(const Matrix3& committed_stress_pa,
+                        const Matrix3& displacement_gradient_increment, double bulk_pa,
+                        double shear_pa, Matrix3* trial_stress_pa, std::string* reason);
+
 // A state that is the Cauchy stress alone. Serialize(): 6 doubles, Voigt order xx yy zz yz xz xy.
 class StressState : public MaterialState {
  public:

@@ -9,6 +9,7 @@
 #include "solvers/fe/explicit_solver.h"
 #include "solvers/fe/mesh.h"
 #include "solvers/material/drucker_prager.h"
+#include "solvers/rig/wheel_contact.h"
 
 namespace gonogo::rig {
 namespace {
@@ -26,11 +27,7 @@ double Smooth(double fraction) {
 // Lines from -extent (or 0) to +extent, fine within `fine_extent` of the centre.
 std::vector<double> CentredLines(double extent_m, double fine_extent_m, double h, bool mirrored) {
   std::vector<double> half = fe::GradedLines(0, extent_m, h, fine_extent_m, 1.3, 4 * h);
-  if (!mirrored) return half;
-  std::vector<double> lines;
-  for (size_t k = half.size() - 1; k > 0; --k) lines.push_back(-half[k]);
-  lines.insert(lines.end(), half.begin(), half.end());
-  return lines;
+  return mirrored ? fe::MirroredLines(half) : half;
 }
 
 struct Bin {
@@ -44,10 +41,7 @@ struct Bin {
 // ring. Floor fixed, side walls on rollers, symmetry planes on rollers.
 Bin MakeBin(const FeSoil& soil, double extent_m, double fine_extent_m, double depth_m, double h,
             bool whole, const RigOptions& options) {
-  std::vector<double> depth = fe::GradedLines(0, depth_m, h, fine_extent_m, 1.3, 4 * h);
-  std::vector<double> z_lines;
-  for (auto it = depth.rbegin(); it != depth.rend(); ++it) z_lines.push_back(-*it);
-  z_lines.back() = 0;
+  std::vector<double> z_lines = fe::DepthLines(depth_m, h, fine_extent_m, 1.3, 4 * h);
   fe::HexMesh mesh = fe::MeshBox(CentredLines(extent_m, fine_extent_m, h, whole),
                                  CentredLines(extent_m, fine_extent_m, h, whole), z_lines);
   auto model = std::make_shared<material::DruckerPrager>(soil.strength);
@@ -74,19 +68,7 @@ Bin MakeBin(const FeSoil& soil, double extent_m, double fine_extent_m, double de
     for (int n : m.NodesOnPlane(axis, extent_m)) s.PrescribeVelocity(n, axis);
     for (int n : m.NodesOnPlane(axis, whole ? -extent_m : 0.0)) s.PrescribeVelocity(n, axis);
   }
-  // Top surface nodes and their tributary areas.
-  const int top = static_cast<int>(m.z_lines_m.size()) - 1;
-  auto half_span = [](const std::vector<double>& lines, int i) {
-    const double left = i > 0 ? lines[i] - lines[i - 1] : 0;
-    const double right = i + 1 < static_cast<int>(lines.size()) ? lines[i + 1] - lines[i] : 0;
-    return 0.5 * (left + right);
-  };
-  for (int j = 0; j < static_cast<int>(m.y_lines_m.size()); ++j) {
-    for (int i = 0; i < static_cast<int>(m.x_lines_m.size()); ++i) {
-      bin.surface.push_back(m.GridNode(i, j, top));
-      bin.areas.push_back(half_span(m.x_lines_m, i) * half_span(m.y_lines_m, j));
-    }
-  }
+  TopSurfaceNodes(m, &bin.surface, &bin.areas);
   return bin;
 }
 
