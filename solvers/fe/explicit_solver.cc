@@ -9,11 +9,32 @@
 
 namespace gonogo::fe {
 
+double RetainedDeviatoricFraction(const Eigen::Matrix3d& stress_n_pa,
+                                  const Eigen::Matrix3d& stress_next_pa,
+                                  const Eigen::Matrix3d& displacement_gradient_increment,
+                                  double shear_modulus_pa) {
+  const auto deviator = [](const Eigen::Matrix3d& t) {
+    return Eigen::Matrix3d(t - t.trace() / 3.0 * Eigen::Matrix3d::Identity());
+  };
+  const Eigen::Matrix3d strain_increment =
+      0.5 * (displacement_gradient_increment + displacement_gradient_increment.transpose());
+  // The rotation of the step leaves the norm unchanged, so the unrotated sum measures the trial.
+  const double trial_norm =
+      (deviator(stress_n_pa) + 2 * shear_modulus_pa * deviator(strain_increment)).norm();
+  const double next_norm = deviator(stress_next_pa).norm();
+  if (!(trial_norm > 0)) return 1.0;
+  const double fraction = next_norm / trial_norm;
+  // Elastic steps differ from 1 only by the second-order rotation error; they keep everything.
+  return fraction > 1 - 1e-6 ? 1.0 : std::max(0.0, fraction);
+}
+
 void ExplicitOptions::Validate(const std::string& p) const {
   Require(density_kg_m3 > 0 && std::isfinite(density_kg_m3), p + "density_kg_m3",
           "must be positive");
   Require(gravity_m_s2.allFinite(), p + "gravity_m_s2", "must be finite");
   Require(hourglass_coefficient >= 0 && hourglass_coefficient <= 0.15, p + "hourglass_coefficient",
+          "must lie in [0, 0.15]");
+  Require(hourglass_viscosity >= 0 && hourglass_viscosity <= 0.15, p + "hourglass_viscosity",
           "must lie in [0, 0.15]");
   Require(time_step_safety > 0 && time_step_safety <= 1, p + "time_step_safety",
           "must lie in (0, 1]");
@@ -38,6 +59,7 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
   const int nn = mesh_.num_nodes();
   references_.resize(ne);
   hourglass_stiffness_n_m_.resize(ne);
+  hourglass_viscosity_n_s_m_.resize(ne);
   nodal_masses_kg_.assign(nn, 0.0);
   double min_length_m = std::numeric_limits<double>::infinity();
   for (int e = 0; e < ne; ++e) {
@@ -49,6 +71,12 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
     // (Flanagan & Belytschko 1981): scales with the element's own P-wave stiffness.
     hourglass_stiffness_n_m_[e] = options_.hourglass_coefficient * p_wave_modulus_pa *
                                   r.volume_m3 * r.gradients_per_m.squaredNorm() / 3.0;
+    // Viscous hourglass coefficient, c = Q_hg rho_0 c_d V_0^(2/3) / 4 (Flanagan & Belytschko 1981;
+    // LS-DYNA Theory Manual, "Hourglass control", viscous form): resists hourglass velocities only,
+    // so it damps the modes the stiffness form leaves free in plastic flow without stiffening
+    // slow deformation.
+    hourglass_viscosity_n_s_m_[e] = options_.hourglass_viscosity * options_.density_kg_m3 *
+                                    wave_speed_m_s * std::pow(r.volume_m3, 2.0 / 3.0) / 4.0;
     // Lumped mass: an eighth of the element's mass to each of its nodes (row sum of the
     // consistent mass of a parallelepiped).
     for (int a = 0; a < 8; ++a) {
@@ -63,6 +91,8 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
   states_.resize(ne);
   for (int e = 0; e < ne; ++e) states_[e] = model_->InitialState();
   stress_pa_.assign(ne, Eigen::Matrix3d::Zero());
+  hourglass_forces_n_.assign(ne, Eigen::Matrix<double, 4, 3>::Zero());
+  hourglass_modes_m_.assign(ne, Eigen::Matrix<double, 4, 3>::Zero());
   element_forces_n_.assign(ne, Mat83::Zero());
   increments_.resize(ne);
 
@@ -125,9 +155,13 @@ StepStatus ExplicitSolver::ComputeInternalForces() {
   }
 
   // 3. Commit, and the element forces: f_a = V_0 P b_a with P = F S = J sigma F^-T, plus the
-  //    hourglass forces f_a += kappa gamma_alpha,a q_alpha, q_alpha = sum_b gamma_alpha,b u_b.
+  //    hourglass forces f_a += gamma_alpha,a (Q_alpha + c dq_alpha/dt): Q of the incremental
+  //    stiffness form, Q_{n+1} = r (Q_n + kappa (q_{n+1} - q_n)) with r of
+  //    RetainedDeviatoricFraction, and the viscous form on the mid-step velocities.
+  const double shear_modulus_pa = moduli_.shear_pa;
 #pragma omp parallel for schedule(static) num_threads(options_.threads)
   for (int e = 0; e < ne; ++e) {
+    const Eigen::Matrix3d previous_stress_pa = stress_pa_[e];
     states_[e] = std::move(responses[e].state);
     stress_pa_[e] = responses[e].stress_pa;
     previous_f_[e] = trial_f_[e];
@@ -142,7 +176,22 @@ StepStatus ExplicitSolver::ComputeInternalForces() {
         displacements.row(a) = (positions_m_[node] - mesh_.reference_positions_m[node]).transpose();
       }
       const Eigen::Matrix<double, 4, 3> modes = r.hourglass_vectors * displacements;
-      forces += hourglass_stiffness_n_m_[e] * r.hourglass_vectors.transpose() * modes;
+      const double retained = RetainedDeviatoricFraction(
+          previous_stress_pa, stress_pa_[e], increments_[e].displacement_gradient_increment,
+          shear_modulus_pa);
+      hourglass_forces_n_[e] =
+          retained * (hourglass_forces_n_[e] +
+                      hourglass_stiffness_n_m_[e] * (modes - hourglass_modes_m_[e]));
+      hourglass_modes_m_[e] = modes;
+      forces += r.hourglass_vectors.transpose() * hourglass_forces_n_[e];
+    }
+    if (hourglass_viscosity_n_s_m_[e] > 0) {
+      Mat83 velocities;
+      for (int a = 0; a < 8; ++a) {
+        velocities.row(a) = velocities_m_s_[mesh_.elements[e][a]].transpose();
+      }
+      forces += hourglass_viscosity_n_s_m_[e] * r.hourglass_vectors.transpose() *
+                (r.hourglass_vectors * velocities);
     }
     element_forces_n_[e] = forces;
   }

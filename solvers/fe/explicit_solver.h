@@ -7,7 +7,8 @@
 //   internal forces           Q_s = int (dE/de)^T S dV_0, which for node a is  V_0 F S dN_a/dX
 //   equations of motion       M e'' = Q_s + Q_e         (here with Q_s entering as -f_int)
 // with a lumped (row-sum) mass, central differences in time (Belytschko, Liu & Moran 2000, Box
-// 6.1), Flanagan-Belytschko stiffness hourglass control, gravity, prescribed velocities per degree
+// 6.1), Flanagan-Belytschko hourglass control (incremental stiffness returned with the element,
+// and viscous), gravity, prescribed velocities per degree
 // of freedom (fixed and roller boundaries), and optional mass-proportional damping for the
 // quasi-static phases.
 //
@@ -32,6 +33,7 @@ struct ExplicitOptions {
   double density_kg_m3 = 0;                  // reference density rho_0
   Vec3 gravity_m_s2 = Vec3(0, 0, -9.81);
   double hourglass_coefficient = 0.05;       // epsilon_hg of the stiffness form, 0 to 0.15
+  double hourglass_viscosity = 0.1;          // Q_hg of the viscous form, 0 to 0.15
   double time_step_safety = 0.5;             // fraction of the critical step StableTimeStep uses
   double mass_damping_per_s = 0;             // alpha of C = alpha M
   int threads = 1;                           // OpenMP threads of the element and node loops
@@ -45,6 +47,17 @@ struct StepStatus {
   bool ok = true;
   std::string reason;
 };
+
+// The fraction of its elastic-trial deviatoric stress an element keeps over one step,
+// ||dev sigma_{n+1}|| / ||dev sigma_n + 2 G dev(sym dH)||, in [0, 1]; 1 for an elastic step.
+// The incremental hourglass stresses are scaled by it, Q_{n+1} = r (Q_n + kappa dq): they are
+// elastic while the element is and are returned with its stress when it flows, so hourglass
+// control does not stiffen plastic flow. For Drucker-Prager's return to the cone r is exactly the
+// radial-return factor 1 - G dgamma / ||s_trial|| (de Souza Neto et al. 2008, eq. 8.89 form).
+double RetainedDeviatoricFraction(const Eigen::Matrix3d& stress_n_pa,
+                                  const Eigen::Matrix3d& stress_next_pa,
+                                  const Eigen::Matrix3d& displacement_gradient_increment,
+                                  double shear_modulus_pa);
 
 class ExplicitSolver {
  public:
@@ -98,6 +111,11 @@ class ExplicitSolver {
   // Per element (elements x ...).
   std::vector<Hex8Reference> references_;
   std::vector<double> hourglass_stiffness_n_m_;
+  std::vector<double> hourglass_viscosity_n_s_m_;
+  // Hourglass generalised stresses Q_alpha (4 x 3, N) and modes q_alpha (4 x 3, m) of the last
+  // committed step, for the incremental form.
+  std::vector<Eigen::Matrix<double, 4, 3>> hourglass_forces_n_;
+  std::vector<Eigen::Matrix<double, 4, 3>> hourglass_modes_m_;
   std::vector<Eigen::Matrix3d> previous_f_;          // F at the last committed step
   std::vector<std::unique_ptr<material::MaterialState>> states_;
   std::vector<Eigen::Matrix3d> stress_pa_;

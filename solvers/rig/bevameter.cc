@@ -51,6 +51,7 @@ Bin MakeBin(const FeSoil& soil, double extent_m, double fine_extent_m, double de
   fe::ExplicitOptions fe_options;
   fe_options.density_kg_m3 = soil.density_kg_m3;
   fe_options.hourglass_coefficient = options.hourglass_coefficient;
+  fe_options.hourglass_viscosity = options.hourglass_viscosity;
   fe_options.time_step_safety = options.time_step_safety;
   fe_options.threads = options.threads;
   Bin bin;
@@ -171,7 +172,8 @@ RingTest RunRing(const FeSoil& soil, double normal_pressure_pa, const BevameterS
   const int load_steps = static_cast<int>(std::ceil(load_s / dt));
   for (int k = 0; k < load_steps; ++k) {
     for (size_t i = 0; i < ring.size(); ++i) {
-      f_ext[ring[i]] = Vec3(0, 0, -normal_pressure_pa * ring_areas[i] * Smooth((k + 1.0) / load_steps));
+      f_ext[ring[i]] =
+          Vec3(0, 0, -normal_pressure_pa * ring_areas[i] * Smooth((k + 1.0) / load_steps));
       s.PrescribeVelocity(ring[i], 0);
       s.PrescribeVelocity(ring[i], 1);
     }

@@ -1,12 +1,16 @@
 // gonogo-rig drawbar        --soil NAME --wheel-diameter M --wheel-width M --wheel-load N
 //                           [--element-size M] [--threads T] [--slip-step S] [--samples]
+//                           [--hourglass-stiffness E] [--hourglass-viscosity Q]
 // gonogo-rig constant-slip  (as above) --slip S [--hold-s T]
+// gonogo-rig towed          (as above) [--hold-s T]
 // gonogo-rig bevameter      --soil NAME [--element-size M] [--threads T]
 //
 // The single-wheel rig of seed 001 section 6.3 on the fe-classic soil bin (solvers/rig/README.md).
 //   drawbar        the full procedure; prints the traction curve as CSV (the columns of
 //                  `gonogo curve --csv`), or with --samples every 5 ms record of the run
 //   constant-slip  phases 1-3, then the slip held for --hold-s (default 1 s); prints the records
+//   towed          phases 1-3, then free rolling (no torque) at the phase-3 forward speed for
+//                  --hold-s; prints the records
 //   bevameter      plate pressure-sinkage and shear-ring tests on the soil and the fitted
 //                  Bekker-Janosi parameters
 // Progress goes to stderr.
@@ -29,9 +33,10 @@ using namespace gonogo;
 [[noreturn]] void Usage(const std::string& problem) {
   std::fprintf(stderr,
                "gonogo-rig: %s\n"
-               "usage: gonogo-rig drawbar|constant-slip --soil NAME --wheel-diameter M\n"
+               "usage: gonogo-rig drawbar|constant-slip|towed --soil NAME --wheel-diameter M\n"
                "         --wheel-width M --wheel-load N [--element-size M] [--threads T]\n"
                "         [--slip-step S] [--samples] [--slip S] [--hold-s T]\n"
+               "         [--hourglass-stiffness E] [--hourglass-viscosity Q]\n"
                "       gonogo-rig bevameter --soil NAME [--element-size M] [--threads T]\n",
                problem.c_str());
   std::exit(2);
@@ -77,6 +82,8 @@ int main(int argc, char** argv) {
     else if (flag == "--wheel-width") wheel.width_m = Number(flag, value());
     else if (flag == "--wheel-load") wheel.load_n = Number(flag, value());
     else if (flag == "--element-size") options.element_size_m = Number(flag, value());
+    else if (flag == "--hourglass-stiffness") options.hourglass_coefficient = Number(flag, value());
+    else if (flag == "--hourglass-viscosity") options.hourglass_viscosity = Number(flag, value());
     else if (flag == "--threads") options.threads = static_cast<int>(Number(flag, value()));
     else if (flag == "--slip-step") slip_step = Number(flag, value());
     else if (flag == "--slip") slip = Number(flag, value());
@@ -112,6 +119,8 @@ int main(int argc, char** argv) {
     rig::RigRun run;
     if (command == "drawbar") {
       run = rig::RunDrawbarPullTest(*soil, wheel, {}, options);
+    } else if (command == "towed") {
+      run = rig::RunTowedTest(*soil, wheel, hold_s, {}, options);
     } else if (command == "constant-slip") {
       if (slip < 0) Usage("constant-slip needs --slip S");
       run = rig::RunConstantSlipTest(*soil, wheel, slip, hold_s, {}, options);
@@ -122,7 +131,7 @@ int main(int argc, char** argv) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "\n%d elements, %d nodes, h = %.4f m, dt = %.3g s, %d steps, %.1f s\n",
                  run.elements, run.nodes, run.element_size_m, run.time_step_s, run.steps, seconds);
-    if (samples || command == "constant-slip") {
+    if (samples || command == "constant-slip" || command == "towed") {
       PrintSamples(run);
       return 0;
     }

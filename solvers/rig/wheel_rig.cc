@@ -23,12 +23,13 @@ struct Schedule {
   DrawbarPullProcedure procedure;
   double radius_m = 0;
   double constant_slip = -1;  // < 0: the slip ramp of phase 4
+  bool towed = false;         // phase 6 instead: forward speed held, the wheel free to turn
   double hold_s = 0;
 
   double RollingStart() const { return procedure.gravity_settle_s + procedure.load_settle_s; }
   double RampStart() const { return RollingStart() + procedure.self_propelled_s; }
   double Duration() const {
-    return RampStart() + (constant_slip < 0 ? procedure.slip_ramp_s : hold_s);
+    return RampStart() + (constant_slip < 0 && !towed ? procedure.slip_ramp_s : hold_s);
   }
   double AngularSpeed() const { return procedure.angular_speed_rad_s; }
 
@@ -44,7 +45,8 @@ struct Schedule {
     const double v0 = procedure.angular_speed_rad_s * radius_m;
     if (t < procedure.gravity_settle_s) return s;
     // The load comes on smoothly over the first half of the load settle, then holds.
-    s.load_fraction = std::min(1.0, (t - procedure.gravity_settle_s) / (0.5 * procedure.load_settle_s));
+    s.load_fraction =
+        std::min(1.0, (t - procedure.gravity_settle_s) / (0.5 * procedure.load_settle_s));
     s.load_fraction = 0.5 - 0.5 * std::cos(kPi * s.load_fraction);
     if (t < RollingStart()) {
       s.phase = 2;
@@ -59,7 +61,10 @@ struct Schedule {
       return s;
     }
     s.angular_speed_rad_s = AngularSpeed();
-    if (constant_slip >= 0) {
+    if (towed) {
+      s.phase = 6;  // angular speed: set by the wheel's own rotation in Simulate
+      s.forward_speed_m_s = v0;
+    } else if (constant_slip >= 0) {
       s.phase = 5;
       s.forward_speed_m_s = (1 - constant_slip) * v0;
     } else {
@@ -139,6 +144,7 @@ RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& sched
   fe::ExplicitOptions fe_options;
   fe_options.density_kg_m3 = soil.density_kg_m3;
   fe_options.hourglass_coefficient = options.hourglass_coefficient;
+  fe_options.hourglass_viscosity = options.hourglass_viscosity;
   fe_options.time_step_safety = options.time_step_safety;
   fe_options.mass_damping_per_s = settle_damping_per_s;
   fe_options.threads = options.threads;
@@ -194,10 +200,15 @@ RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& sched
   double hub_z_m = radius;  // touching the undisturbed surface
   double hub_vz_m_s = 0;
   double hub_x_m = start_x;
+  // A towed wheel turns freely: (I/2) d(omega)/dt = -(torque the drive would have to supply)/2,
+  // I = m R^2 / 2 of a solid disc of the wheel's mass W / g.
+  const double half_inertia_kg_m2 = 0.5 * half_mass_kg * radius * radius;
+  double towed_angular_speed_rad_s = schedule.AngularSpeed();
   SampleSums sums;
   for (int step = 0; step < steps; ++step) {
     const double t = solver.time_s();
-    const Schedule::State state = schedule.At(t);
+    Schedule::State state = schedule.At(t);
+    if (state.phase == 6) state.angular_speed_rad_s = towed_angular_speed_rad_s;
     solver.set_mass_damping_per_s(state.phase <= 2 ? settle_damping_per_s
                                                    : options.rolling_damping_per_s);
     auto& f_ext = solver.external_forces_n();
@@ -219,6 +230,7 @@ RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& sched
     hub_vz_m_s += dt * hub_az;
     hub_z_m += dt * hub_vz_m_s;
     hub_x_m += dt * state.forward_speed_m_s;
+    if (state.phase == 6) towed_angular_speed_rad_s += dt * load.moment_y_nm / half_inertia_kg_m2;
 
     RigSample sample;
     sample.slip = state.phase >= 3 && state.angular_speed_rad_s > 0
@@ -281,6 +293,17 @@ RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
   Schedule schedule;
   schedule.procedure = procedure;
   schedule.radius_m = wheel.radius_m;
+  return Simulate(soil, wheel, schedule, options);
+}
+
+RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
+                    const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  Require(hold_s > 0, "hold_s", "must be positive");
+  Schedule schedule;
+  schedule.procedure = procedure;
+  schedule.radius_m = wheel.radius_m;
+  schedule.towed = true;
+  schedule.hold_s = hold_s;
   return Simulate(soil, wheel, schedule, options);
 }
 

@@ -46,7 +46,8 @@ struct DrawbarPullProcedure {
 struct RigOptions {
   double element_size_m = 0;       // near the wheel path; 0: radius / elements_per_radius
   double elements_per_radius = 6;
-  double hourglass_coefficient = 0.05;
+  double hourglass_coefficient = 0.05;  // fe::ExplicitOptions
+  double hourglass_viscosity = 0.1;     // fe::ExplicitOptions
   double rolling_damping_per_s = 2;  // soil mass damping once the wheel rolls, 1/s
   double time_step_safety = 0.5;
   int threads = 1;
@@ -59,7 +60,7 @@ struct RigOptions {
 // One record per output interval (every step is too many).
 struct RigSample {
   double time_s = 0;
-  int phase = 0;                 // 1..4 as in the procedure; 5 for constant slip
+  int phase = 0;                 // 1..4 as in the procedure; 5 constant slip; 6 towed
   double slip = 0;               // 1 - V / (omega R); 0 while settling
   double forward_speed_m_s = 0;
   double angular_speed_rad_s = 0;
@@ -87,6 +88,12 @@ RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
 // Phases 1-3, then the slip fixed at `slip` (omega held, V = (1 - s) omega R) for `hold_s`.
 RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
                            const DrawbarPullProcedure& procedure, const RigOptions& options);
+
+// Phases 1-3, then towed for `hold_s`: the forward speed of phase 3 held and no torque on the
+// wheel, which turns as the soil makes it (free rolling). Its drawbar pull is minus the motion
+// resistance of free rolling, and its slip (negative: skid) the free-rolling slip.
+RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
+                    const DrawbarPullProcedure& procedure, const RigOptions& options);
 
 // The traction curve at `slips` from a drawbar-pull run. Filtering: each requested slip s_k is the
 // mean of the ramp samples with |s - s_k| <= w/2, w = max(0.05, spacing of the slips); s = 0 also

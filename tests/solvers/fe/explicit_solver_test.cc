@@ -234,6 +234,59 @@ TEST(ExplicitSolverTest, AnInvertedElementFailsTheStepAndChangesNothing) {
   EXPECT_EQ(solver.time_s(), t);
 }
 
+// Hourglass control, incremental stiffness form: its scale factor r against closed forms, and
+// in an elastic element the increments add up to the total-displacement force kappa gamma^T q.
+TEST(HourglassTest, RetainedFractionIsOneElasticAndTheRadialReturnFactorPlastic) {
+  const double cohesion = 10e3, shear_modulus = kYoung / (2 * (1 + kPoisson));
+  material::DruckerPragerParams p;
+  p.young_pa = kYoung;
+  p.poisson = kPoisson;
+  p.cohesion_pa = cohesion;
+  p.friction_angle_deg = 0;  // von Mises: sqrt(J2) = xi c, xi = 2 / sqrt(3) (compression match)
+  const material::DruckerPrager model(p);
+  const auto state = model.InitialState();
+  auto shear = [&](double gamma) {
+    material::PointIncrement increment;
+    increment.displacement_gradient_increment(0, 1) = gamma;
+    increment.committed = state.get();
+    const std::vector<material::PointResponse> responses = model.Update({increment}, false);
+    const material::PointResponse& response = responses[0];
+    return RetainedDeviatoricFraction(Eigen::Matrix3d::Zero(), response.stress_pa,
+                                      increment.displacement_gradient_increment, shear_modulus);
+  };
+  // Elastic: ||s|| = sqrt(2) G gamma below sqrt(2) (2 / sqrt(3)) c.
+  EXPECT_EQ(shear(0.5 * cohesion / shear_modulus), 1.0);
+  // Plastic, G gamma = 4 c: r = (2 sqrt(2) c / sqrt(3)) / (sqrt(2) G gamma) = 1 / (2 sqrt(3)).
+  EXPECT_NEAR(shear(4 * cohesion / shear_modulus), 1 / (2 * std::sqrt(3.0)), 1e-9);
+}
+
+TEST(HourglassTest, ElasticIncrementsAddUpToTheTotalForm) {
+  ExplicitOptions options = Options();
+  options.hourglass_viscosity = 0;
+  ExplicitSolver solver(MeshBox(Lines(1, 0.1), Lines(1, 0.1), Lines(1, 0.1)), Elastic(), options);
+  const Hex8Reference& r = solver.element_reference(0);
+  // Drive the nodes along the first hourglass vector in x over 20 steps, then hold them.
+  const double dt = 1e-4, amplitude_m = 1e-4;
+  for (int k = 0; k <= 20; ++k) {
+    for (int a = 0; a < 8; ++a) {
+      const int node = solver.mesh().elements[0][a];
+      const double v = k < 20 ? amplitude_m * r.hourglass_vectors(0, a) / (20 * dt) : 0.0;
+      for (int d = 0; d < 3; ++d) solver.PrescribeVelocity(node, d, d == 0 ? v : 0.0);
+    }
+    ASSERT_TRUE(solver.Step(dt).ok);
+  }
+  // Pure hourglass motion: no centroid strain, so no stress, and the force is kappa gamma^T q.
+  EXPECT_LT(solver.element_stress_pa()[0].norm(), 1e-6);
+  const double kappa = options.hourglass_coefficient * PWaveModulus() * r.volume_m3 *
+                       r.gradients_per_m.squaredNorm() / 3.0;
+  const double q = amplitude_m * r.hourglass_vectors.row(0).squaredNorm();
+  for (int a = 0; a < 8; ++a) {
+    const int node = solver.mesh().elements[0][a];
+    EXPECT_NEAR(solver.internal_forces_n()[node].x(), kappa * r.hourglass_vectors(0, a) * q,
+                1e-9 * kappa * q);
+  }
+}
+
 TEST(MeshTest, GradedLinesEndExactlyAndGrow) {
   const std::vector<double> l = GradedLines(0, 1.0, 0.05, 0.2, 1.3, 0.2);
   EXPECT_DOUBLE_EQ(l.front(), 0.0);
