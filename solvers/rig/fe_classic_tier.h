@@ -33,7 +33,9 @@ class FeClassicTier : public TractionTier {
       : library_(std::move(library)), options_(options) {}
 
   std::string Name() const override { return "fe-classic"; }
-  std::string Version() const override { return "fe-classic-1"; }
+  // Bumped whenever the rig's physics changes, so cached curves of the old model are not served
+  // (2: incremental, stress-returned and viscous hourglass control).
+  std::string Version() const override { return "fe-classic-2"; }
   bool UsesConeIndex() const override { return false; }
   bool UsesSoilName() const override { return true; }
   void ValidateSoil(const SoilState& soil, const std::string& field) const override;
