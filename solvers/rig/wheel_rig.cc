@@ -18,18 +18,23 @@ namespace {
 constexpr double kGravity = 9.81;
 constexpr double kPi = 3.14159265358979323846;
 
-// Wheel kinematics and load against time for both procedures.
+// Wheel kinematics and load against time: phases 1-3, then one of three endings.
 struct Schedule {
+  enum class Ending {
+    kSlipRamp,      // phase 4
+    kConstantSlip,  // phase 5: `constant_slip` for `hold_s`
+    kTowed,         // phase 6: forward speed held for `hold_s`, the wheel free to turn
+  };
   DrawbarPullProcedure procedure;
   double radius_m = 0;
-  double constant_slip = -1;  // < 0: the slip ramp of phase 4
-  bool towed = false;         // phase 6 instead: forward speed held, the wheel free to turn
+  Ending ending = Ending::kSlipRamp;
+  double constant_slip = 0;
   double hold_s = 0;
 
   double RollingStart() const { return procedure.gravity_settle_s + procedure.load_settle_s; }
   double RampStart() const { return RollingStart() + procedure.self_propelled_s; }
   double Duration() const {
-    return RampStart() + (constant_slip < 0 && !towed ? procedure.slip_ramp_s : hold_s);
+    return RampStart() + (ending == Ending::kSlipRamp ? procedure.slip_ramp_s : hold_s);
   }
   double AngularSpeed() const { return procedure.angular_speed_rad_s; }
 
@@ -61,10 +66,10 @@ struct Schedule {
       return s;
     }
     s.angular_speed_rad_s = AngularSpeed();
-    if (towed) {
+    if (ending == Ending::kTowed) {
       s.phase = 6;  // angular speed: set by the wheel's own rotation in Simulate
       s.forward_speed_m_s = v0;
-    } else if (constant_slip >= 0) {
+    } else if (ending == Ending::kConstantSlip) {
       s.phase = 5;
       s.forward_speed_m_s = (1 - constant_slip) * v0;
     } else {
@@ -302,7 +307,7 @@ RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
   Schedule schedule;
   schedule.procedure = procedure;
   schedule.radius_m = wheel.radius_m;
-  schedule.towed = true;
+  schedule.ending = Schedule::Ending::kTowed;
   schedule.hold_s = hold_s;
   return Simulate(soil, wheel, schedule, options);
 }
@@ -314,6 +319,7 @@ RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double sli
   Schedule schedule;
   schedule.procedure = procedure;
   schedule.radius_m = wheel.radius_m;
+  schedule.ending = Schedule::Ending::kConstantSlip;
   schedule.constant_slip = slip;
   schedule.hold_s = hold_s;
   return Simulate(soil, wheel, schedule, options);

@@ -314,12 +314,12 @@ Rve Rve::Restore(const std::string& bytes, int threads) {
   std::string state;
   in.GetBlob(state);
   Require(in.AtEnd(), "state", "trailing bytes after the saved RVE");
-  // A placeholder grain; RestoreState replaces grains, cell and time step.
-  Particles placeholder;
-  placeholder.Add(Vec3::Zero(), Vec3::Zero(), params.mean_radius_m, params.material.density_kg_m3);
+  // A simulation needs one grain to exist; RestoreState replaces grains, cell and time step.
+  Particles single_grain;
+  single_grain.Add(Vec3::Zero(), Vec3::Zero(), params.mean_radius_m, params.material.density_kg_m3);
   auto simulation = std::make_unique<Simulation>(
       SimulationParamsFor(params, params.material, 100.0 * params.mean_radius_m, 0.0),
-      std::move(placeholder));
+      std::move(single_grain));
   simulation->RestoreState(state);
   Rve rve(params, std::move(simulation));
   rve.strain_ = strain;

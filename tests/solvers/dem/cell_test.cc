@@ -139,9 +139,9 @@ TEST(DeformingCell, SaveAndRestoreContinueBitIdentically) {
   const std::string saved = original.SaveState();
   original.Run(400);
 
-  Particles placeholder;
-  placeholder.Add(Vec3::Zero(), Vec3::Zero(), kRadiusM, 2650.0);
-  Simulation restored(params, placeholder);
+  Particles single_grain;
+  single_grain.Add(Vec3::Zero(), Vec3::Zero(), kRadiusM, 2650.0);
+  Simulation restored(params, single_grain);
   restored.RestoreState(saved);
   restored.Run(400);
   ASSERT_GT(original.ContactCount(), 100);
@@ -158,7 +158,7 @@ TEST(DeformingCell, SaveAndRestoreContinueBitIdentically) {
   // About 180 bytes per grain (with the neighbour list's build positions), 150 per contact.
   EXPECT_LT(saved.size(), 200u * grains.size() + 200u * original.ContactCount());
 
-  Simulation untouched(params, placeholder);
+  Simulation untouched(params, single_grain);
   const std::string before = untouched.SaveState();
   EXPECT_THROW(untouched.RestoreState(saved.substr(0, saved.size() / 2)), InputError);
   EXPECT_THROW(untouched.RestoreState("not a state"), InputError);
