@@ -82,10 +82,15 @@ class ByteReader {
     values.resize(count);
     for (T& value : values) Get(value);
   }
+  // Tags are a 6-character kind and a 2-digit format version ("GNGDEM02").
   void ExpectTag(const char (&tag)[9]) {
     Need(8);
-    Require(std::memcmp(bytes_.data() + offset_, tag, 8) == 0, "state",
+    const char* found = bytes_.data() + offset_;
+    Require(std::memcmp(found, tag, 6) == 0, "state",
             std::string("not a saved ") + tag + " block (wrong or corrupt buffer)");
+    Require(std::memcmp(found + 6, tag + 6, 2) == 0, "state",
+            std::string("saved in format ") + std::string(found, 8) + "; this build reads " + tag +
+                " only (save the state again with this build)");
     offset_ += 8;
   }
   void GetBlob(std::string& blob) {

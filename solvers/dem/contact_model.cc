@@ -242,43 +242,80 @@ EepaNormal::Branches EepaNormal::BranchesFor(double max_overlap_m,
 
 NormalResponse EepaNormal::Force(double overlap_m, double max_overlap_m,
                                  double effective_radius_m) const {
-  if (overlap_m <= 0.0) return {};
+  return Force(overlap_m, max_overlap_m, max_overlap_m, effective_radius_m);
+}
+
+NormalResponse EepaNormal::Force(double overlap_m, double max_overlap_m, double line_max_overlap_m,
+                                 double effective_radius_m) const {
+  return ForceOnBranch(overlap_m, max_overlap_m, line_max_overlap_m, effective_radius_m).response;
+}
+
+EepaNormal::BranchResponse EepaNormal::ForceOnBranch(double overlap_m, double max_overlap_m,
+                                                     double line_max_overlap_m,
+                                                     double effective_radius_m) const {
+  if (overlap_m <= 0.0) return {{}, Branch::kLoading};
   const double n = params_.slope_exponent, chi = params_.tensile_exponent;
   const double f0 = params_.pull_off_force_n;
-  const Branches b = BranchesFor(std::max(max_overlap_m, overlap_m), effective_radius_m);
+  max_overlap_m = std::max(max_overlap_m, overlap_m);
+  line_max_overlap_m = std::min(line_max_overlap_m, max_overlap_m);
+  // The adhesive branch belongs to the largest flattening, d_max; the k2 line to d_L.
+  const Branches b = BranchesFor(max_overlap_m, effective_radius_m);
+  const double line_plastic_pow_n = params_.plasticity_ratio * Power(line_max_overlap_m, n);
   const double d_pow_n = Power(overlap_m, n);
   const double loading_stiffness_n_m = n * b.k1 * d_pow_n / overlap_m;
-  // Loading f0 + k1 d^n: on the virgin curve (d = d_max) or above the unloading line.
+  // Loading f0 + k1 d^n: on the virgin curve (d >= d_L) or above the k2 line.
   const double loading_n = b.k1 * d_pow_n;
-  const double unloading_n = b.k2 * (d_pow_n - b.plastic_overlap_pow_n);
-  if (overlap_m >= max_overlap_m || loading_n <= unloading_n) {
-    return {f0 + loading_n, loading_stiffness_n_m, loading_stiffness_n_m};
+  const double unloading_n = b.k2 * (d_pow_n - line_plastic_pow_n);
+  if (overlap_m >= line_max_overlap_m || loading_n <= unloading_n) {
+    return {{f0 + loading_n, loading_stiffness_n_m, loading_stiffness_n_m}, Branch::kLoading};
   }
-  // Unloading/reloading f0 + k2 (d^n - d_p^n) down to d_min, then adhesive f0 - k_adh d^chi.
+  // Unloading/reloading f0 + k2 (d^n - d_p^n) down to the adhesive branch f0 - k_adh d^chi.
   const double d_pow_chi = Power(overlap_m, chi);
   const double adhesive_n = -b.k_adh * d_pow_chi;
   if (!b.has_adhesive_branch || unloading_n >= adhesive_n) {
-    return {f0 + unloading_n, n * b.k2 * d_pow_n / overlap_m, loading_stiffness_n_m};
+    return {{f0 + unloading_n, n * b.k2 * d_pow_n / overlap_m, loading_stiffness_n_m},
+            Branch::kLine};
   }
-  return {f0 + adhesive_n, -chi * b.k_adh * d_pow_chi / overlap_m, loading_stiffness_n_m};
+  return {{f0 + adhesive_n, -chi * b.k_adh * d_pow_chi / overlap_m, loading_stiffness_n_m},
+          Branch::kAdhesive};
 }
 
 double EepaNormal::UnloadingEnergyJ(double overlap_m, double max_overlap_m,
                                     double effective_radius_m) const {
+  return UnloadingEnergyJ(overlap_m, max_overlap_m, max_overlap_m, effective_radius_m);
+}
+
+double EepaNormal::UnloadingEnergyJ(double overlap_m, double max_overlap_m,
+                                    double line_max_overlap_m, double effective_radius_m) const {
   if (overlap_m <= 0.0) return 0.0;
   const double n = params_.slope_exponent, chi = params_.tensile_exponent;
   const double f0 = params_.pull_off_force_n;
-  const Branches b = BranchesFor(std::max(max_overlap_m, overlap_m), effective_radius_m);
-  // Antiderivative of the unloading branch k2 (s^n - d_p^n).
+  max_overlap_m = std::max(max_overlap_m, overlap_m);
+  line_max_overlap_m = std::clamp(line_max_overlap_m, overlap_m, max_overlap_m);
+  const Branches b = BranchesFor(max_overlap_m, effective_radius_m);
+  const double line_plastic_pow_n = params_.plasticity_ratio * Power(line_max_overlap_m, n);
+  // Antiderivative of the unloading line k2 (s^n - d_p^n).
   auto unloading_j = [&](double s) {
-    return b.k2 * (Power(s, n + 1.0) / (n + 1.0) - b.plastic_overlap_pow_n * s);
+    return b.k2 * (Power(s, n + 1.0) / (n + 1.0) - line_plastic_pow_n * s);
   };
   if (!b.has_adhesive_branch) return f0 * overlap_m + unloading_j(overlap_m);
-  // Adhesive branch -k_adh s^chi below d_min, unloading branch above it.
-  const double min_overlap_m = std::pow(std::max(b.min_overlap_pow_n, 0.0), 1.0 / n);
-  const double s = std::min(overlap_m, min_overlap_m);
+  // Adhesive branch -k_adh s^chi below the crossing s_x, the line above it. On the line of d_max
+  // s_x = d_min; on a lower line s_x solves k2 (s^n - d_p^n) + k_adh s^chi = 0, whose left side
+  // rises with s from -k2 d_p^n < 0 at s = 0 to k_adh d_p^chi >= 0 at s = d_p (bisection).
+  double crossing_m = std::pow(std::max(b.min_overlap_pow_n, 0.0), 1.0 / n);
+  if (line_max_overlap_m < max_overlap_m) {
+    double low_m = 0.0, high_m = std::pow(line_plastic_pow_n, 1.0 / n);
+    for (int i = 0; i < 200 && high_m - low_m > 1e-15 * high_m; ++i) {
+      const double mid_m = 0.5 * (low_m + high_m);
+      const double gap_n =
+          b.k2 * (Power(mid_m, n) - line_plastic_pow_n) + b.k_adh * Power(mid_m, chi);
+      (gap_n < 0.0 ? low_m : high_m) = mid_m;
+    }
+    crossing_m = 0.5 * (low_m + high_m);
+  }
+  const double s = std::min(overlap_m, crossing_m);
   double energy_j = f0 * overlap_m - b.k_adh * Power(s, chi + 1.0) / (chi + 1.0);
-  if (overlap_m > min_overlap_m) energy_j += unloading_j(overlap_m) - unloading_j(min_overlap_m);
+  if (overlap_m > crossing_m) energy_j += unloading_j(overlap_m) - unloading_j(crossing_m);
   return energy_j;
 }
 
@@ -305,12 +342,29 @@ double EepaNormal::ElasticEnergyJ(double overlap_m, double effective_radius_m) c
 NormalResponse EepaNormal::EvaluateWithHistory(double overlap_m, double effective_radius_m,
                                                ContactHistory& history) const {
   history.max_overlap_m = std::max(history.max_overlap_m, overlap_m);
-  return Force(overlap_m, history.max_overlap_m, effective_radius_m);
+  double& line_max_overlap_m = history.line_max_overlap_m;
+  const BranchResponse r =
+      ForceOnBranch(overlap_m, history.max_overlap_m, line_max_overlap_m, effective_radius_m);
+  if (r.branch == Branch::kLoading) {
+    line_max_overlap_m = std::max(line_max_overlap_m, overlap_m);
+  } else if (r.branch == Branch::kAdhesive && r.response.force_n < params_.pull_off_force_n) {
+    // Reloading from here follows the k2 line through (d, F), parallel to the first (seed 001
+    // sec. 5.2): k2 (d^n - lambda_p d_L^n) = -k_adh d^chi, so
+    // d_L^n = (d^n + (f0 - F) / k2) / lambda_p. The pull f0 - F > 0 implies lambda_p > 0.
+    const double n = params_.slope_exponent;
+    const double k2 = LoadingStiffness(effective_radius_m) / (1.0 - params_.plasticity_ratio);
+    const double line_pow_n =
+        (Power(overlap_m, n) + (params_.pull_off_force_n - r.response.force_n) / k2) /
+        params_.plasticity_ratio;
+    line_max_overlap_m = std::min(line_max_overlap_m, std::pow(line_pow_n, 1.0 / n));
+  }
+  return r.response;
 }
 
 double EepaNormal::ElasticEnergyWithHistoryJ(double overlap_m, double effective_radius_m,
                                              const ContactHistory& history) const {
-  return UnloadingEnergyJ(overlap_m, history.max_overlap_m, effective_radius_m);
+  return UnloadingEnergyJ(overlap_m, history.max_overlap_m,
+                          std::max(history.line_max_overlap_m, overlap_m), effective_radius_m);
 }
 
 EepaTangential::EepaTangential(const EepaParams& params)

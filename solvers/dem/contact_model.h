@@ -37,6 +37,10 @@ struct ContactHistory {
   Vec3 tangential_displacement_m = Vec3::Zero();  // xi, stored tangential spring elongation
   Vec3 rolling_angle_rad = Vec3::Zero();          // theta_r, accumulated relative rolling rotation
   double max_overlap_m = 0.0;  // delta_max, largest overlap of this contact (EEPA plasticity)
+  // EEPA: the overlap at which the unloading/reloading line the contact is on meets the virgin
+  // loading curve. Equals max_overlap_m until the contact reloads from the adhesive branch, which
+  // moves it onto a parallel line that meets the virgin curve sooner.
+  double line_max_overlap_m = 0.0;
 };
 
 // Kinematics of one contact at the current step. `normal` points from body j to body i.
@@ -232,14 +236,17 @@ struct EepaParams {
 EepaParams Seed001EepaSoil(const std::string& name);
 
 // EEPA normal law (Thakur et al. 2014, Granular Matter 16:383, sec. 2; Morrissey 2013). With
-// d = d_n, d_max = history.max_overlap_m and k2 = k1 / (1 - lambda_p):
-//   F = f0 + min(k1 d^n, max(k2 (d^n - d_p^n), -k_adh d^chi)),  d_p^n = lambda_p d_max^n,
+// d = d_n, d_max = history.max_overlap_m, d_L = history.line_max_overlap_m <= d_max and
+// k2 = k1 / (1 - lambda_p):
+//   F = f0 + min(k1 d^n, max(k2 (d^n - d_p^n), -k_adh d^chi)),  d_p^n = lambda_p d_L^n,
 // the three branches of the paper in one expression: loading f0 + k1 d^n, unloading/reloading
 // f0 + k2 (d^n - d_p^n), adhesive f0 - k_adh d^chi.
-// k_adh makes the adhesive branch meet the unloading one at the minimum force
-//   f_min = f0 - 3/2 pi Delta_gamma a_p,  a_p = sqrt(r_e d_p),
+// k_adh makes the adhesive branch meet the unloading line of d_max at the minimum force
+//   f_min = f0 - 3/2 pi Delta_gamma a_p,  a_p = sqrt(r_e d_p(d_max)),
 // reached at d_min^n = d_p^n - (f0 - f_min) / k2, so k_adh = (f0 - f_min) / d_min^chi. When
 // d_min^n <= 0 the unloading branch reaches d = 0 first and there is no adhesive branch.
+// A contact that reloads from the adhesive branch does so along the k2 line through its point,
+// parallel to the first one (seed 001 sec. 5.2): d_L drops to where that line meets k1 d^n.
 // Sources and choices: solvers/dem/README.md.
 class EepaNormal : public NormalModel {
  public:
@@ -248,17 +255,24 @@ class EepaNormal : public NormalModel {
   NormalResponse Evaluate(double overlap_m, double effective_radius_m) const override;
   // Integral of F from 0 to d_n on the unloading branch of d_max = d_n.
   double ElasticEnergyJ(double overlap_m, double effective_radius_m) const override;
-  // Sets history.max_overlap_m = max(d_max, d_n), then F on the branch of (d_n, d_max).
+  // F on the branch of (d_n, d_max, d_L); updates d_max = max(d_max, d_n), d_L = d_n on the
+  // virgin curve, and on the adhesive branch d_L to the k2 line through (d_n, F).
   NormalResponse EvaluateWithHistory(double overlap_m, double effective_radius_m,
                                      ContactHistory& history) const override;
   double ElasticEnergyWithHistoryJ(double overlap_m, double effective_radius_m,
                                    const ContactHistory& history) const override;
 
   // F and dF/dd at overlap d_n <= max_overlap_m of a contact whose largest overlap was
-  // max_overlap_m; changes nothing.
+  // max_overlap_m and which is on the k2 line of that overlap; changes nothing.
   NormalResponse Force(double overlap_m, double max_overlap_m, double effective_radius_m) const;
+  // The same on the k2 line that meets the virgin curve at line_max_overlap_m <= max_overlap_m.
+  NormalResponse Force(double overlap_m, double max_overlap_m, double line_max_overlap_m,
+                       double effective_radius_m) const;
   // Integral of F(s, max_overlap_m) for s from 0 to overlap_m <= max_overlap_m.
   double UnloadingEnergyJ(double overlap_m, double max_overlap_m, double effective_radius_m) const;
+  // The same along the k2 line of line_max_overlap_m, then the adhesive branch of max_overlap_m.
+  double UnloadingEnergyJ(double overlap_m, double max_overlap_m, double line_max_overlap_m,
+                          double effective_radius_m) const;
   // k1 in N/m^n for effective radius r_e.
   double LoadingStiffness(double effective_radius_m) const;
   // dF/dd of the loading branch, n k1 d^{n-1} (N/m).
@@ -276,6 +290,13 @@ class EepaNormal : public NormalModel {
     double k_adh;                  // N/m^chi
   };
   Branches BranchesFor(double max_overlap_m, double effective_radius_m) const;
+  enum class Branch { kLoading, kLine, kAdhesive };
+  struct BranchResponse {
+    NormalResponse response;
+    Branch branch;
+  };
+  BranchResponse ForceOnBranch(double overlap_m, double max_overlap_m, double line_max_overlap_m,
+                               double effective_radius_m) const;
 
   EepaParams params_;
   double plastic_overlap_factor_;  // lambda_p^{1/n}: d_p = lambda_p^{1/n} d_max

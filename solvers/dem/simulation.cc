@@ -388,17 +388,20 @@ Eigen::Matrix<double, 6, 6> Simulation::ContactStiffnessVoigtNM() const {
 }
 
 namespace {
-constexpr char kStateTag[9] = "GNGDEM01";
+// 02: contact history carries the EEPA line overlap (line_max_overlap_m).
+constexpr char kStateTag[9] = "GNGDEM02";
 
 void PutHistory(ByteWriter& out, const ContactHistory& history) {
   out.Put(history.tangential_displacement_m);
   out.Put(history.rolling_angle_rad);
   out.Put(history.max_overlap_m);
+  out.Put(history.line_max_overlap_m);
 }
 void GetHistory(ByteReader& in, ContactHistory& history) {
   in.Get(history.tangential_displacement_m);
   in.Get(history.rolling_angle_rad);
   in.Get(history.max_overlap_m);
+  in.Get(history.line_max_overlap_m);
 }
 }  // namespace
 

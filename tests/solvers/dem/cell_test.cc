@@ -165,6 +165,17 @@ TEST(DeformingCell, SaveAndRestoreContinueBitIdentically) {
   std::string corrupt = saved;
   corrupt[0] = 'X';
   EXPECT_THROW(untouched.RestoreState(corrupt), InputError);
+  // A state of an older format is refused by name, not misread.
+  std::string older = saved;
+  older[6] = '0';
+  older[7] = '1';
+  try {
+    untouched.RestoreState(older);
+    ADD_FAILURE() << "an older format was read";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("saved in format GNGDEM01"), std::string::npos)
+        << error.what();
+  }
   EXPECT_EQ(untouched.SaveState(), before);
 }
 

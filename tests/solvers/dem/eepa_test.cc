@@ -110,17 +110,21 @@ TEST(EepaNormal, UnloadingFollowsK2AndReachesF0AtPlasticOverlap) {
   }
 }
 
-TEST(EepaNormal, ReloadingBelowMaxRetracesUnloadingThenRejoinsLoading) {
+TEST(EepaNormal, ReloadingFromTheK2LineRetracesItThenRejoinsLoading) {
   const EepaParams p = StickySoil();
   const EepaNormal law(p);
+  const Expected e = ExpectedFor(p, kMaxOverlapM);
   ContactHistory history;
   law.EvaluateWithHistory(kMaxOverlapM, kEffectiveRadiusM, history);
+  // Unload along k2 but stop above d_min, where the adhesive branch starts.
   std::vector<double> overlaps, unloading;
-  for (double d = kMaxOverlapM; d > 0.05 * kMaxOverlapM; d -= 0.01 * kMaxOverlapM) {
+  for (double d = kMaxOverlapM; d > 1.02 * e.min_m; d -= 0.002 * kMaxOverlapM) {
     overlaps.push_back(d);
     unloading.push_back(law.EvaluateWithHistory(d, kEffectiveRadiusM, history).force_n);
   }
-  // Back up through the same overlaps: the same forces (adhesive branch included).
+  ASSERT_GT(overlaps.size(), 10u);
+  EXPECT_EQ(history.line_max_overlap_m, kMaxOverlapM);
+  // Back up through the same overlaps: the same forces.
   for (std::size_t i = overlaps.size(); i-- > 0;) {
     ASSERT_EQ(law.EvaluateWithHistory(overlaps[i], kEffectiveRadiusM, history).force_n,
               unloading[i])
@@ -132,6 +136,154 @@ TEST(EepaNormal, ReloadingBelowMaxRetracesUnloadingThenRejoinsLoading) {
   EXPECT_NEAR(law.EvaluateWithHistory(d, kEffectiveRadiusM, history).force_n,
               p.pull_off_force_n + k1 * std::pow(d, 1.5), 1e-12 * k1 * std::pow(d, 1.5));
   EXPECT_EQ(history.max_overlap_m, d);
+  EXPECT_EQ(history.line_max_overlap_m, d);
+}
+
+// Seed 001 sec. 5.2 (after Thakur et al. 2014): "If reloading of the contact occurs while on the
+// adhesion branch, the contact follows the k2 path ... parallel to the initial unloading/reloading
+// path until reaching the k1 path. Further, loading takes place on the virgin loading path."
+TEST(EepaNormal, ReloadingFromTheAdhesiveBranchFollowsAParallelK2Line) {
+  const EepaParams p = StickySoil();
+  const EepaNormal law(p);
+  const Expected e = ExpectedFor(p, kMaxOverlapM);
+  const double n = 1.5, f0 = p.pull_off_force_n;
+  ContactHistory history;
+  law.EvaluateWithHistory(kMaxOverlapM, kEffectiveRadiusM, history);
+  // Unload into the adhesive branch, to half of d_min.
+  double turn_m = 0.0, turn_n = 0.0;
+  for (double d = kMaxOverlapM; d >= 0.5 * e.min_m; d -= 0.005 * e.min_m) {
+    turn_m = d;
+    turn_n = law.EvaluateWithHistory(d, kEffectiveRadiusM, history).force_n;
+  }
+  ASSERT_NEAR(turn_n, f0 - e.k_adh * turn_m * turn_m, 1e-12 * e.pull_n);  // adhesive, chi = 2
+  // The new line f0 + k2 (d^n - d_L'^n) through the turning point meets k1 d^n at d_L'.
+  const double line_plastic_pow_n = std::pow(turn_m, n) + (f0 - turn_n) / e.k2;
+  const double line_max_m = std::pow(line_plastic_pow_n / p.plasticity_ratio, 1.0 / n);
+  ASSERT_LT(line_max_m, 0.9 * kMaxOverlapM);
+  EXPECT_NEAR(history.line_max_overlap_m / line_max_m, 1.0, 1e-12);
+  EXPECT_EQ(history.max_overlap_m, kMaxOverlapM);
+  // Reload: F - F_turn = k2 (d^n - d_turn^n), the slope of the first line, up to d_L'; the
+  // retraced adhesive branch (the law before this change) would stay below f0 until d_min.
+  for (double d = turn_m + 0.01 * (line_max_m - turn_m); d < line_max_m;
+       d += 0.01 * (line_max_m - turn_m)) {
+    const NormalResponse r = law.EvaluateWithHistory(d, kEffectiveRadiusM, history);
+    ASSERT_NEAR(r.force_n - turn_n, e.k2 * (std::pow(d, n) - std::pow(turn_m, n)), 1e-9 * e.pull_n)
+        << "d " << d;
+    ASSERT_NEAR(r.stiffness_n_m / (n * e.k2 * std::sqrt(d)), 1.0, 1e-12);
+  }
+  // Beyond d_L' the virgin curve, below the old d_max.
+  const double k1 = e.k1;
+  for (double d = 1.01 * line_max_m; d < 0.99 * kMaxOverlapM; d += 0.05 * kMaxOverlapM) {
+    const double got = law.EvaluateWithHistory(d, kEffectiveRadiusM, history).force_n;
+    ASSERT_NEAR(got, f0 + k1 * std::pow(d, n), 1e-12 * k1 * std::pow(d, n)) << "d " << d;
+    ASSERT_EQ(history.line_max_overlap_m, d);
+  }
+  // Unloading from a point u on the virgin curve follows the k2 line of u, not that of d_max,
+  // down to the adhesive branch of d_max (same f_min / k_adh: the flattened patch of d_max).
+  const double u = history.line_max_overlap_m;
+  const double plastic_pow_n = p.plasticity_ratio * std::pow(u, n);
+  const double d = 0.5 * (u + std::pow(plastic_pow_n, 1.0 / n));
+  EXPECT_NEAR(law.EvaluateWithHistory(d, kEffectiveRadiusM, history).force_n,
+              f0 + e.k2 * (std::pow(d, n) - plastic_pow_n), 1e-9 * e.pull_n);
+  const double deep = 0.2 * e.min_m;
+  EXPECT_NEAR(law.EvaluateWithHistory(deep, kEffectiveRadiusM, history).force_n,
+              f0 - e.k_adh * deep * deep, 1e-12 * e.pull_n);
+  EXPECT_EQ(history.max_overlap_m, kMaxOverlapM);
+}
+
+TEST(EepaNormal, EnergyAlongAParallelLineIsTheIntegralOfItsForce) {
+  const EepaParams p = StickySoil();
+  const EepaNormal law(p);
+  const Expected e = ExpectedFor(p, kMaxOverlapM);
+  const double line_max_m = 0.6 * kMaxOverlapM;
+  // U(d) = integral of F(s) from 0 to d along the lower line and the adhesive branch of d_max:
+  // midpoint rule on 2e5 intervals against the closed-form-plus-bisection energy.
+  for (double d : {0.2 * line_max_m, 0.5 * line_max_m, 0.8 * line_max_m, 0.99 * line_max_m}) {
+    const int steps = 200000;
+    double integral_j = 0.0;
+    for (int i = 0; i < steps; ++i) {
+      const double s = (i + 0.5) * d / steps;
+      integral_j += law.Force(s, kMaxOverlapM, line_max_m, kEffectiveRadiusM).force_n * d / steps;
+    }
+    const double energy_j = law.UnloadingEnergyJ(d, kMaxOverlapM, line_max_m, kEffectiveRadiusM);
+    EXPECT_NEAR(energy_j, integral_j, 1e-8 * std::abs(p.pull_off_force_n) * kMaxOverlapM)
+        << "d " << d;
+  }
+  // On the line of d_max the general form is the closed form.
+  EXPECT_EQ(
+      law.UnloadingEnergyJ(0.7 * kMaxOverlapM, kMaxOverlapM, kEffectiveRadiusM),
+      law.UnloadingEnergyJ(0.7 * kMaxOverlapM, kMaxOverlapM, kMaxOverlapM, kEffectiveRadiusM));
+}
+
+TEST(EepaSimulation, PeriodicChainReloadsOnTheParallelLineAndRestoresIt) {
+  // Four sticky grains in a row, each touching the next and the last the first's image: the cell
+  // is stretched along x into the adhesive branch, then compressed back. By symmetry no grain
+  // moves off the affine field, so every contact has overlap d = 2 r - L_x / 4 and force
+  // W_xx / (4 (2 r - d)) from the contact virial (no dashpot: e = 1). The adhesive branch softens
+  // (dF/dd < 0), so the uniform chain is unstable there; a step of 1e-3 Rayleigh steps keeps the
+  // round-off seed from growing within the test.
+  EepaParams p = StickySoil();
+  p.restitution = 1.0;
+  const Expected e = ExpectedFor(p, kMaxOverlapM);
+  const double n = 1.5, f0 = p.pull_off_force_n, spacing_m = 2.0 * kRadiusM - kMaxOverlapM;
+  SimulationParams params;
+  params.material = p.Material();
+  params.time_step_s = 1e-3 * RayleighTimeStepS(kRadiusM, params.material);
+  params.box.hi_m = Vec3(4.0 * spacing_m, 10.0 * kRadiusM, 10.0 * kRadiusM);
+  Particles grains;
+  for (int g = 0; g < 4; ++g) {
+    grains.Add(Vec3((g + 0.5) * spacing_m, 5.0 * kRadiusM, 5.0 * kRadiusM), Vec3::Zero(), kRadiusM,
+               p.density_kg_m3);
+  }
+  Simulation original(params, grains, ContactModel::Eepa(p));
+  auto overlap_m = [&](const Simulation& sim) {
+    return 2.0 * kRadiusM - sim.cell().edges_m(0, 0) / 4.0;
+  };
+  auto force_n = [&](const Simulation& sim) {
+    return sim.ContactVirialNM()(0, 0) / (4.0 * (2.0 * kRadiusM - overlap_m(sim)));
+  };
+  original.Run(1);
+  ASSERT_EQ(original.ContactCount(), 4);
+  // Stretch until the overlap is half of d_min, in 1000 steps.
+  const int steps = 1000;
+  const double stretch =
+      std::log((4.0 * (2.0 * kRadiusM - 0.5 * e.min_m)) / original.cell().edges_m(0, 0));
+  Eigen::Matrix3d gradient = Eigen::Matrix3d::Zero();
+  gradient(0, 0) = stretch / (steps * original.time_step_s());
+  original.SetVelocityGradient(gradient);
+  original.Run(steps);
+  const double turn_m = overlap_m(original);
+  const double turn_n = f0 - e.k_adh * turn_m * turn_m;
+  ASSERT_NEAR(turn_m / (0.5 * e.min_m), 1.0, 1e-3);
+  ASSERT_NEAR(force_n(original), turn_n, 1e-9 * e.pull_n);
+  const double line_max_m =
+      std::pow((std::pow(turn_m, n) + (f0 - turn_n) / e.k2) / p.plasticity_ratio, 1.0 / n);
+  // Compress back: the parallel line up to d_L', then the virgin curve.
+  original.SetVelocityGradient(-gradient);
+  std::string saved;
+  int on_line = 0, on_virgin = 0;
+  for (int step = 1; step <= steps; ++step) {
+    original.Step();
+    const double d = overlap_m(original);
+    const double expected_n = d < line_max_m
+                                  ? turn_n + e.k2 * (std::pow(d, n) - std::pow(turn_m, n))
+                                  : f0 + e.k1 * std::pow(d, n);
+    ASSERT_NEAR(force_n(original), expected_n, 1e-7 * e.pull_n) << "step " << step;
+    (d < line_max_m ? on_line : on_virgin) += 1;
+    if (step == 40) saved = original.SaveState();  // on the parallel line
+  }
+  EXPECT_GT(on_line, 50);
+  EXPECT_GT(on_virgin, 100);
+  // A restore on the parallel line carries d_L (and d_max) and continues bit for bit.
+  Particles one;
+  one.Add(Vec3::Zero(), Vec3::Zero(), kRadiusM, p.density_kg_m3);
+  Simulation restored(params, one, ContactModel::Eepa(p));
+  restored.RestoreState(saved);
+  restored.Run(steps - 40);
+  EXPECT_TRUE(restored.ContactVirialNM() == original.ContactVirialNM());
+  for (int g = 0; g < 4; ++g) {
+    EXPECT_TRUE(restored.particles().position_m[g] == original.particles().position_m[g]) << g;
+  }
 }
 
 TEST(EepaNormal, AdhesiveBranchAndMinimumForceMatchClosedForm) {
