@@ -65,7 +65,62 @@ void Simulation::SetVelocityGradient(const Eigen::Matrix3d& velocity_gradient_1_
   deforming_ = deforming;
 }
 
+Eigen::Matrix3i Simulation::ReduceCellEdges() {
+  Eigen::Matrix3i basis = Eigen::Matrix3i::Identity();
+  Eigen::Matrix3d& edges = cell_.edges_m;
+  // Pairwise (Lagrange-Gauss) reduction: e_b -= k e_a with k = round(e_b . e_a / |e_a|^2), done
+  // only when |e_b . e_a| > (1/2 + 1e-9) |e_a|^2, which shortens e_b strictly; the sum of squared
+  // edge lengths falls at every change, so the loop ends. Each change is a shear of the basis
+  // (det 1): same lattice, same volume and orientation.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        if (a == b) continue;
+        const double ratio = edges.col(b).dot(edges.col(a)) / edges.col(a).squaredNorm();
+        if (std::abs(ratio) <= 0.5 + 1e-9) continue;
+        const int k = static_cast<int>(std::lround(ratio));
+        edges.col(b) -= k * edges.col(a);
+        basis.col(b) -= k * basis.col(a);
+        changed = true;
+      }
+    }
+  }
+  return basis;
+}
+
 void Simulation::Rebuild() {
+  std::vector<NeighborPair> old_pairs = neighbors_.pairs();
+  std::vector<ContactHistory> old_history = std::move(pair_history_);
+  if (params_.reduce_sheared_cell && cell_.periodic[0] && cell_.periodic[1] && cell_.periodic[2]) {
+    const Eigen::Matrix3i basis = ReduceCellEdges();
+    if (basis != Eigen::Matrix3i::Identity()) {
+      ++cell_reduction_count_;
+      // Lattice offsets counted in old edges, n, are M^-1 n in the new ones (E n = E M M^-1 n):
+      // the grains' wrap counts and the contacts' keys, so history and unwrapped positions carry
+      // over. M^-1 is an integer matrix (det M = 1).
+      const Eigen::Matrix3i inverse = basis.cast<double>().inverse().array().round().cast<int>();
+      auto to_new = [&](std::array<int, 3>& offset) {
+        const Eigen::Vector3i moved = inverse * Eigen::Vector3i(offset[0], offset[1], offset[2]);
+        offset = {moved[0], moved[1], moved[2]};
+      };
+      for (std::array<int, 3>& image : particles_.image) to_new(image);
+      for (NeighborPair& pair : old_pairs) to_new(pair.key_shift);
+      // The merge below needs the old list in key order again.
+      std::vector<std::size_t> order(old_pairs.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t x, std::size_t y) { return KeyLess(old_pairs[x], old_pairs[y]); });
+      std::vector<NeighborPair> sorted_pairs(old_pairs.size());
+      std::vector<ContactHistory> sorted_history(old_history.size());
+      for (std::size_t k = 0; k < order.size(); ++k) {
+        sorted_pairs[k] = old_pairs[order[k]];
+        if (!old_history.empty()) sorted_history[k] = old_history[order[k]];
+      }
+      old_pairs = std::move(sorted_pairs);
+      old_history = std::move(sorted_history);
+    }
+  }
   // Wrap positions into the cell (fractional coordinates in [0, 1) on periodic axes) and count
   // the cell edges crossed.
   const Eigen::Matrix3d to_fraction = cell_.edges_m.inverse();
@@ -80,8 +135,6 @@ void Simulation::Rebuild() {
     }
     if (!crossed_edges.isZero(0.0)) particles_.position_m[p] -= cell_.edges_m * crossed_edges;
   }
-  const std::vector<NeighborPair> old_pairs = neighbors_.pairs();
-  std::vector<ContactHistory> old_history = std::move(pair_history_);
   const double max_radius_m =
       *std::max_element(particles_.radius_m.begin(), particles_.radius_m.end());
   neighbors_.Build(particles_, cell_, params_.skin_fraction * max_radius_m, params_.threads);

@@ -28,6 +28,11 @@ struct SimulationParams {
   double time_step_safety = 0.2;  // fraction of the Rayleigh step, (0, 1]
   double skin_fraction = 0.2;     // Verlet skin / largest radius, > 0
   int threads = 1;                // OpenMP threads for the force loop, >= 1
+  // On a cell periodic on every axis, each neighbour-list rebuild replaces an edge tilted past
+  // half of another by the equivalent lattice vector e_b - k e_a (k the nearest integer to
+  // e_b . e_a / |e_a|^2): the same periodic system in a less sheared cell, so simple shear can
+  // go on past the strain where the faces would come closer than the neighbour search allows.
+  bool reduce_sheared_cell = true;
 
   void Validate() const;
 };
@@ -73,6 +78,8 @@ class Simulation {
   double time_step_s() const { return time_step_s_; }
   double time_s() const { return time_s_; }
   int rebuild_count() const { return rebuild_count_; }
+  // Times the cell edges were replaced by an equivalent, less sheared set (reduce_sheared_cell).
+  int cell_reduction_count() const { return cell_reduction_count_; }
   int ContactCount() const;
   // Mean |net force| over grains / mean |contact force| over contacts (0 when there are none):
   // the usual quasi-static equilibrium measure (e.g. Ng 2006; 1e-3 or below is static).
@@ -88,6 +95,9 @@ class Simulation {
 
  private:
   void Rebuild();
+  // The lattice reduction of reduce_sheared_cell: new edges = edges M, M integer with det 1.
+  // Returns M (the identity when nothing changed).
+  Eigen::Matrix3i ReduceCellEdges();
   void ComputeForces();
   void ComputePairForces();
   void SumParticleForces();
@@ -104,6 +114,7 @@ class Simulation {
   double time_step_s_ = 0.0;
   double time_s_ = 0.0;
   int rebuild_count_ = 0;
+  int cell_reduction_count_ = 0;
   bool forces_valid_ = false;
   // Per-pair state, aligned with neighbors_.pairs().
   std::vector<ContactHistory> pair_history_;

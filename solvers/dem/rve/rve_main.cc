@@ -81,8 +81,11 @@ Options Parse(int argc, char** argv) {
       options.rve.consolidation_pressure_pa = ParseNumber(flag, value);
     } else if (flag == "--axial-strain") {
       options.axial_strain = ParseNumber(flag, value);
-      if (options.axial_strain <= 0.0 || options.axial_strain > 0.5) {
-        Usage("--axial-strain must be in (0, 0.5]");
+      // Simple shear (gamma_xz) may go far: the engine reduces the sheared cell as it goes.
+      const double largest = options.path == "simple-shear" ? 5.0 : 0.5;
+      if (options.axial_strain <= 0.0 || options.axial_strain > largest) {
+        Usage(options.path == "simple-shear" ? "--axial-strain (gamma_xz) must be in (0, 5]"
+                                             : "--axial-strain must be in (0, 0.5]");
       }
     } else if (flag == "--threads") {
       options.rve.threads = static_cast<int>(ParseNumber(flag, value));
