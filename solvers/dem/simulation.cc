@@ -115,7 +115,7 @@ void Simulation::Rebuild() {
       std::vector<ContactHistory> sorted_history(old_history.size());
       for (std::size_t k = 0; k < order.size(); ++k) {
         sorted_pairs[k] = old_pairs[order[k]];
-        if (!old_history.empty()) sorted_history[k] = old_history[order[k]];
+        sorted_history[k] = old_history[order[k]];
       }
       old_pairs = std::move(sorted_pairs);
       old_history = std::move(sorted_history);

@@ -22,12 +22,40 @@ SimulationParams FrictionlessCube() {
   return params;
 }
 
+// 216 grains on a 6 x 6 x 6 lattice of spacing 1.9 mm, radii 1 mm +- 5 % (so neighbours overlap)
+// and small random velocities, in a periodic cube: a jammed packing once it runs.
+constexpr int kLatticeSide = 6;
+constexpr double kLatticeSpacingM = 1.9e-3;
+
+Particles JammedLatticeGrains() {
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  Particles grains;
+  const int side = kLatticeSide;
+  for (int g = 0; g < side * side * side; ++g) {
+    const Vec3 site((g % side + 0.5) * kLatticeSpacingM,
+                    ((g / side) % side + 0.5) * kLatticeSpacingM,
+                    (g / (side * side) + 0.5) * kLatticeSpacingM);
+    grains.Add(site, 0.02 * Vec3(unit(random), unit(random), unit(random)),
+               kRadiusM * (1.0 + 0.05 * unit(random)), 2650.0);
+  }
+  return grains;
+}
+
+SimulationParams JammedLatticeParams() {
+  SimulationParams params;
+  params.material.restitution = 0.5;
+  params.box.hi_m = Vec3::Constant(kLatticeSide * kLatticeSpacingM);
+  return params;
+}
+
 // Simple shear u_x = gamma z brings B's image through the top face into contact with A, and only
 // the sheared image: in the unsheared cell the same image is 2.12 r_sum away.
 TEST(DeformingCell, ContactThroughTheShearedImageOfTheTopFace) {
   const double gamma = 0.5, overlap_m = 0.05e-3, gap_m = 2.0 * kRadiusM - overlap_m;
   const Vec3 a(2e-3, 5e-3, 1.5e-3);
-  // After the shear, A' = A + gamma z_A e_x; B' - c' (c' = (gamma L, 0, L)) must sit gap_m below A'.
+  // After the shear, A' = A + gamma z_A e_x; B' - c' (c' = (gamma L, 0, L)) must sit gap_m
+  // below A'.
   const double z_b = kSideM + a.z() - gap_m;
   const double x_b = a.x() + gamma * (a.z() + kSideM - z_b);
   // Very heavy grains: the contact force does not move them, so the geometry stays closed-form.
@@ -156,20 +184,8 @@ TEST(DeformingCell, ShearToGammaThreeReducesTheCellAndKeepsUnwrappedPositions) {
 // reducing the cell: the same periodic system, so the same contacts, stress and unwrapped
 // positions up to round-off; without reduction the tilt stays 0.8 L.
 TEST(DeformingCell, ReducingTheCellChangesNothingPhysical) {
-  std::mt19937_64 random(11);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  Particles grains;
-  const int side = 6;
-  const double spacing_m = 1.9e-3;
-  for (int g = 0; g < side * side * side; ++g) {
-    const Vec3 site((g % side + 0.5) * spacing_m, ((g / side) % side + 0.5) * spacing_m,
-                    (g / (side * side) + 0.5) * spacing_m);
-    grains.Add(site, 0.02 * Vec3(unit(random), unit(random), unit(random)),
-               kRadiusM * (1.0 + 0.05 * unit(random)), 2650.0);
-  }
-  SimulationParams params;
-  params.material.restitution = 0.5;
-  params.box.hi_m = Vec3::Constant(side * spacing_m);
+  const Particles grains = JammedLatticeGrains();
+  const SimulationParams params = JammedLatticeParams();
   SimulationParams fixed = params;
   fixed.reduce_sheared_cell = false;
   Simulation reduced(params, grains), unreduced(fixed, grains);
@@ -182,8 +198,8 @@ TEST(DeformingCell, ReducingTheCellChangesNothingPhysical) {
   unreduced.Run(steps);
   EXPECT_EQ(reduced.cell_reduction_count(), 1);
   EXPECT_EQ(unreduced.cell_reduction_count(), 0);
-  EXPECT_NEAR(unreduced.cell().edges_m(0, 2), 0.8 * side * spacing_m, 1e-12);
-  EXPECT_NEAR(reduced.cell().edges_m(0, 2), -0.2 * side * spacing_m, 1e-12);
+  EXPECT_NEAR(unreduced.cell().edges_m(0, 2), 0.8 * kLatticeSide * kLatticeSpacingM, 1e-12);
+  EXPECT_NEAR(reduced.cell().edges_m(0, 2), -0.2 * kLatticeSide * kLatticeSpacingM, 1e-12);
   ASSERT_GT(reduced.ContactCount(), 100);
   EXPECT_EQ(reduced.ContactCount(), unreduced.ContactCount());
   const Eigen::Matrix3d virial = unreduced.ContactVirialNM();
@@ -196,20 +212,8 @@ TEST(DeformingCell, ReducingTheCellChangesNothingPhysical) {
 // A jammed, sheared packing saved mid-run and restored into a fresh Simulation continues
 // bit-identically; a damaged buffer is refused and leaves the target untouched.
 TEST(DeformingCell, SaveAndRestoreContinueBitIdentically) {
-  std::mt19937_64 random(11);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  Particles grains;
-  const int side = 6;
-  const double spacing_m = 1.9e-3;
-  for (int g = 0; g < side * side * side; ++g) {
-    const Vec3 site((g % side + 0.5) * spacing_m, ((g / side) % side + 0.5) * spacing_m,
-                    (g / (side * side) + 0.5) * spacing_m);
-    grains.Add(site, 0.02 * Vec3(unit(random), unit(random), unit(random)),
-               kRadiusM * (1.0 + 0.05 * unit(random)), 2650.0);
-  }
-  SimulationParams params;
-  params.material.restitution = 0.5;
-  params.box.hi_m = Vec3::Constant(side * spacing_m);
+  const Particles grains = JammedLatticeGrains();
+  const SimulationParams params = JammedLatticeParams();
   Simulation original(params, grains);
   Eigen::Matrix3d gradient = Eigen::Matrix3d::Zero();
   gradient(0, 2) = 20.0;
