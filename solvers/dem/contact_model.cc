@@ -33,15 +33,6 @@ void MaterialParams::Validate() const {
   Require(restitution > 0.0 && restitution <= 1.0, "restitution", "must be in (0, 1]");
 }
 
-void ProjectOntoContactPlane(const Vec3& normal, Vec3& stored) {
-  const double normal_part = stored.dot(normal);
-  if (normal_part == 0.0) return;
-  const double length_sq_before = stored.squaredNorm();
-  stored -= normal_part * normal;
-  const double length_sq_after = stored.squaredNorm();
-  if (length_sq_after > 0.0) stored *= std::sqrt(length_sq_before / length_sq_after);
-}
-
 HertzNormal::HertzNormal(const MaterialParams& material)
     : effective_modulus_pa_(material.EffectiveModulusPa()) {}
 
@@ -455,65 +446,6 @@ ContactModel ContactModel::Eepa(const EepaParams& params) {
   }
   return ContactModel(std::make_shared<EepaNormal>(params), damping,
                       std::make_shared<EepaTangential>(params), rolling);
-}
-
-ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
-                                     ContactHistory& history) const {
-  return fused_.enabled ? EvaluateFused(kin, dt_s, history) : EvaluateGeneral(kin, dt_s, history);
-}
-
-ContactResult ContactModel::EvaluateFused(const ContactKinematics& kin, double dt_s,
-                                          ContactHistory& history) const {
-  // The general path below with the seed 000 sub-models written out: the same equations
-  // (README "Contact law (seed 000)"), sqrt(r_e d_n) and sqrt(k_n m*) taken once.
-  ContactResult result;
-  const Vec3& n = kin.normal;
-  const double root_m = std::sqrt(kin.effective_radius_m * kin.overlap_m);
-  const double k_n = fused_.two_e_star_pa * root_m;
-  const double elastic_n = (2.0 / 3.0) * k_n * kin.overlap_m;  // 4/3 E* sqrt(r_e) d^{3/2}
-  const double root_km = std::sqrt(k_n * kin.effective_mass_kg);
-  const double gamma_n = fused_.normal_damping * root_km;
-  const double v_n = kin.contact_velocity_m_s.dot(n);
-  const double f_n = elastic_n - gamma_n * v_n;
-  result.normal_force_n = f_n;
-  result.normal_stiffness_n_m = k_n;
-
-  const Vec3 v_t = kin.contact_velocity_m_s - v_n * n;
-  Vec3& xi = history.tangential_displacement_m;
-  ProjectOntoContactPlane(n, xi);
-  xi += v_t * dt_s;
-  const double k_t = fused_.tangential_factor_pa * root_m;
-  const double gamma_t = fused_.tangential_damping * root_km;
-  Vec3 f_t = -k_t * xi - gamma_t * v_t;
-  const double f_t_limit = fused_.friction * std::max(f_n, 0.0);
-  const double f_t_magnitude_sq = f_t.squaredNorm();
-  if (f_t_magnitude_sq > f_t_limit * f_t_limit) {
-    const double f_t_magnitude = std::sqrt(f_t_magnitude_sq);
-    f_t *= f_t_limit / f_t_magnitude;
-    xi = k_t > 0.0 ? Vec3(-(f_t + gamma_t * v_t) / k_t) : Vec3::Zero();
-    result.sliding = true;
-  }
-  result.tangential_stiffness_n_m = k_t;
-  result.force_on_i_n = f_n * n + f_t;
-  const Vec3 n_cross_ft = n.cross(f_t);
-  Vec3 rolling_torque = Vec3::Zero();
-  if (fused_.rolling) {
-    Vec3& theta = history.rolling_angle_rad;
-    ProjectOntoContactPlane(n, theta);
-    theta += (kin.relative_spin_rad_s - kin.relative_spin_rad_s.dot(n) * n) * dt_s;
-    const double r_e = kin.effective_radius_m;
-    const double k_r = fused_.rolling_stiffness * k_n * r_e * r_e;
-    rolling_torque = -k_r * theta;
-    const double limit = fused_.rolling_limit * std::max(f_n, 0.0) * r_e;
-    const double magnitude_sq = rolling_torque.squaredNorm();
-    if (magnitude_sq > limit * limit) {
-      rolling_torque *= limit / std::sqrt(magnitude_sq);
-      theta = k_r > 0.0 ? Vec3(-rolling_torque / k_r) : Vec3::Zero();
-    }
-  }
-  result.torque_on_i_n_m = -kin.arm_i_m * n_cross_ft + rolling_torque;
-  result.torque_on_j_n_m = -kin.arm_j_m * n_cross_ft - rolling_torque;
-  return result;
 }
 
 ContactResult ContactModel::EvaluateGeneral(const ContactKinematics& kin, double dt_s,

@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -368,7 +370,96 @@ class ContactModel {
 };
 
 // Rotates a stored history vector onto the plane normal to `normal`, keeping its length (the
-// LAMMPS/LIGGGHTS practice for shear history when the contact plane turns).
-void ProjectOntoContactPlane(const Vec3& normal, Vec3& stored);
+// LAMMPS/LIGGGHTS practice for shear history when the contact plane turns). Inline: it runs twice
+// per contact per step.
+inline void ProjectOntoContactPlane(const Vec3& normal, Vec3& stored) {
+  const double normal_part = stored.dot(normal);
+  if (normal_part == 0.0) return;
+  const double length_sq_before = stored.squaredNorm();
+  stored -= normal_part * normal;
+  const double length_sq_after = stored.squaredNorm();
+  if (length_sq_after > 0.0) stored *= std::sqrt(length_sq_before / length_sq_after);
+}
+
+// ProjectOntoContactPlane on two history vectors at once, with the same result bit for bit: the
+// two length ratios share one packed division and one packed square root (the divider is the
+// bottleneck of the contact law). A vector with no normal part gets the ratio 1 exactly.
+inline void ProjectTwoOntoContactPlane(const Vec3& normal, Vec3& first, Vec3& second) {
+  const double first_length_sq_before = first.squaredNorm();
+  const double second_length_sq_before = second.squaredNorm();
+  first -= first.dot(normal) * normal;
+  second -= second.dot(normal) * normal;
+  const double first_length_sq_after = first.squaredNorm();
+  const double second_length_sq_after = second.squaredNorm();
+  const Eigen::Array2d before(first_length_sq_before, second_length_sq_before);
+  const Eigen::Array2d after(first_length_sq_after > 0.0 ? first_length_sq_after : 1.0,
+                             second_length_sq_after > 0.0 ? second_length_sq_after : 1.0);
+  const Eigen::Array2d scale = (before / after).sqrt();
+  first *= first_length_sq_after > 0.0 ? scale[0] : 1.0;
+  second *= second_length_sq_after > 0.0 ? scale[1] : 1.0;
+}
+
+// Defined here so that the pair loop inlines the seed 000 contact (the hot path of every step).
+inline ContactResult ContactModel::Evaluate(const ContactKinematics& kin, double dt_s,
+                                            ContactHistory& history) const {
+  return fused_.enabled ? EvaluateFused(kin, dt_s, history) : EvaluateGeneral(kin, dt_s, history);
+}
+
+inline ContactResult ContactModel::EvaluateFused(const ContactKinematics& kin, double dt_s,
+                                                 ContactHistory& history) const {
+  // The general path below with the seed 000 sub-models written out: the same equations
+  // (README "Contact law (seed 000)"), sqrt(r_e d_n) and sqrt(k_n m*) taken once.
+  ContactResult result;
+  const Vec3& n = kin.normal;
+  const double root_m = std::sqrt(kin.effective_radius_m * kin.overlap_m);
+  const double k_n = fused_.two_e_star_pa * root_m;
+  const double elastic_n = (2.0 / 3.0) * k_n * kin.overlap_m;  // 4/3 E* sqrt(r_e) d^{3/2}
+  const double root_km = std::sqrt(k_n * kin.effective_mass_kg);
+  const double gamma_n = fused_.normal_damping * root_km;
+  const double v_n = kin.contact_velocity_m_s.dot(n);
+  const double f_n = elastic_n - gamma_n * v_n;
+  result.normal_force_n = f_n;
+  result.normal_stiffness_n_m = k_n;
+
+  const Vec3 v_t = kin.contact_velocity_m_s - v_n * n;
+  Vec3& xi = history.tangential_displacement_m;
+  Vec3& theta = history.rolling_angle_rad;
+  if (fused_.rolling) {
+    ProjectTwoOntoContactPlane(n, xi, theta);
+  } else {
+    ProjectOntoContactPlane(n, xi);
+  }
+  xi += v_t * dt_s;
+  const double k_t = fused_.tangential_factor_pa * root_m;
+  const double gamma_t = fused_.tangential_damping * root_km;
+  Vec3 f_t = -k_t * xi - gamma_t * v_t;
+  const double f_t_limit = fused_.friction * std::max(f_n, 0.0);
+  const double f_t_magnitude_sq = f_t.squaredNorm();
+  if (f_t_magnitude_sq > f_t_limit * f_t_limit) {
+    const double f_t_magnitude = std::sqrt(f_t_magnitude_sq);
+    f_t *= f_t_limit / f_t_magnitude;
+    xi = k_t > 0.0 ? Vec3(-(f_t + gamma_t * v_t) / k_t) : Vec3::Zero();
+    result.sliding = true;
+  }
+  result.tangential_stiffness_n_m = k_t;
+  result.force_on_i_n = f_n * n + f_t;
+  const Vec3 n_cross_ft = n.cross(f_t);
+  Vec3 rolling_torque = Vec3::Zero();
+  if (fused_.rolling) {
+    theta += (kin.relative_spin_rad_s - kin.relative_spin_rad_s.dot(n) * n) * dt_s;
+    const double r_e = kin.effective_radius_m;
+    const double k_r = fused_.rolling_stiffness * k_n * r_e * r_e;
+    rolling_torque = -k_r * theta;
+    const double limit = fused_.rolling_limit * std::max(f_n, 0.0) * r_e;
+    const double magnitude_sq = rolling_torque.squaredNorm();
+    if (magnitude_sq > limit * limit) {
+      rolling_torque *= limit / std::sqrt(magnitude_sq);
+      theta = k_r > 0.0 ? Vec3(-rolling_torque / k_r) : Vec3::Zero();
+    }
+  }
+  result.torque_on_i_n_m = -kin.arm_i_m * n_cross_ft + rolling_torque;
+  result.torque_on_j_n_m = -kin.arm_j_m * n_cross_ft - rolling_torque;
+  return result;
+}
 
 }  // namespace gonogo::dem

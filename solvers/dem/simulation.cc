@@ -156,62 +156,110 @@ void Simulation::Rebuild() {
   pair_torque_j_n_m_.assign(pairs.size(), Vec3::Zero());
   pair_normal_stiffness_n_m_.assign(pairs.size(), 0.0);
   pair_tangential_stiffness_n_m_.assign(pairs.size(), 0.0);
+  ComputePairConstants();
+}
+
+void Simulation::ComputePairConstants() {
+  // Radii and masses never change within a simulation, so the two quotients of every contact
+  // are taken once per list rather than at every step.
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  pair_effective_radius_m_.resize(pairs.size());
+  pair_effective_mass_kg_.resize(pairs.size());
+  const Particles& g = particles_;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const int i = pairs[k].i;
+    const int j = pairs[k].j;
+    pair_effective_radius_m_[k] = g.radius_m[i] * g.radius_m[j] / (g.radius_m[i] + g.radius_m[j]);
+    pair_effective_mass_kg_[k] = g.mass_kg[i] * g.mass_kg[j] / (g.mass_kg[i] + g.mass_kg[j]);
+  }
+}
+
+inline bool Simulation::EvaluatePair(int k) {
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  const Particles& g = particles_;
+  const int i = pairs[k].i;
+  const int j = pairs[k].j;
+  const std::array<int, 3>& image = pairs[k].image;
+  const Vec3 separation =
+      (image[0] | image[1] | image[2]) == 0
+          ? Vec3(g.position_m[i] - g.position_m[j])
+          : Vec3(g.position_m[i] - (g.position_m[j] + pairs[k].ShiftM(cell_.edges_m)));
+  const double reach_m = g.radius_m[i] + g.radius_m[j];
+  const double distance_sq = separation.squaredNorm();
+  const double distance_m = distance_sq < reach_m * reach_m ? std::sqrt(distance_sq) : reach_m;
+  const double overlap_m = reach_m - distance_m;
+  if (overlap_m <= 0.0 || distance_sq == 0.0) {
+    // Out of contact: forces vanish and the history is forgotten. A pair already cleared (its
+    // overlap slot is exactly 0; a rebuild marks every slot -1) needs no writes.
+    if (pair_overlap_m_[k] != 0.0) {
+      pair_overlap_m_[k] = 0.0;
+      pair_history_[k] = ContactHistory{};
+      pair_force_on_i_n_[k].setZero();
+      pair_torque_i_n_m_[k].setZero();
+      pair_torque_j_n_m_[k].setZero();
+      pair_normal_stiffness_n_m_[k] = 0.0;
+      pair_tangential_stiffness_n_m_[k] = 0.0;
+    }
+    return false;
+  }
+  pair_overlap_m_[k] = overlap_m;
+  ContactKinematics kin;
+  kin.normal = separation * (1.0 / distance_m);
+  kin.overlap_m = overlap_m;
+  kin.effective_radius_m = pair_effective_radius_m_[k];
+  kin.effective_mass_kg = pair_effective_mass_kg_[k];
+  // Contact point in the middle of the overlap, so the arms add up to the centre distance and
+  // the pair conserves angular momentum exactly.
+  kin.arm_i_m = g.radius_m[i] - 0.5 * overlap_m;
+  kin.arm_j_m = g.radius_m[j] - 0.5 * overlap_m;
+  kin.contact_velocity_m_s =
+      g.velocity_m_s[i] - g.velocity_m_s[j] -
+      (kin.arm_i_m * g.angular_velocity_rad_s[i] + kin.arm_j_m * g.angular_velocity_rad_s[j])
+          .cross(kin.normal);
+  // In a deforming cell the images move apart with the affine field as well.
+  if (deforming_) kin.contact_velocity_m_s += velocity_gradient_1_s_ * separation;
+  kin.relative_spin_rad_s = g.angular_velocity_rad_s[i] - g.angular_velocity_rad_s[j];
+  const ContactResult result = model_.Evaluate(kin, time_step_s_, pair_history_[k]);
+  pair_normal_stiffness_n_m_[k] = result.normal_stiffness_n_m;
+  pair_tangential_stiffness_n_m_[k] = result.sliding ? 0.0 : result.tangential_stiffness_n_m;
+  pair_force_on_i_n_[k] = result.force_on_i_n;
+  pair_torque_i_n_m_[k] = result.torque_on_i_n_m;
+  pair_torque_j_n_m_[k] = result.torque_on_j_n_m;
+  return true;
 }
 
 void Simulation::ComputePairForces() {
-  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
-  const int pair_count = static_cast<int>(pairs.size());
-  const Particles& g = particles_;
+  const int pair_count = static_cast<int>(neighbors_.pairs().size());
   // Each pair is computed on its own and written to its own slot: no races, no atomics.
 #pragma omp parallel for schedule(static) num_threads(params_.threads)
+  for (int k = 0; k < pair_count; ++k) EvaluatePair(k);
+}
+
+void Simulation::ComputeAndSumForcesOneThread() {
+  // What ComputePairForces then SumParticleForces give, in one pass: every grain still starts
+  // from its weight and adds its pairs in ascending pair order, then its walls, so the sums are
+  // the same bit for bit, without the second pass over the incident lists.
+  const int n = static_cast<int>(particles_.size());
+  const int walls = static_cast<int>(params_.walls.size());
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  const int pair_count = static_cast<int>(pairs.size());
+  for (int p = 0; p < n; ++p) {
+    particles_.force_n[p] = particles_.mass_kg[p] * params_.gravity_m_s2;
+    particles_.torque_n_m[p].setZero();
+  }
   for (int k = 0; k < pair_count; ++k) {
+    if (!EvaluatePair(k)) continue;
     const int i = pairs[k].i;
     const int j = pairs[k].j;
-    const std::array<int, 3>& image = pairs[k].image;
-    const Vec3 separation = (image[0] | image[1] | image[2]) == 0
-                                ? Vec3(g.position_m[i] - g.position_m[j])
-                                : Vec3(g.position_m[i] - (g.position_m[j] + pairs[k].ShiftM(cell_.edges_m)));
-    const double reach_m = g.radius_m[i] + g.radius_m[j];
-    const double distance_sq = separation.squaredNorm();
-    const double distance_m = distance_sq < reach_m * reach_m ? std::sqrt(distance_sq) : reach_m;
-    const double overlap_m = reach_m - distance_m;
-    if (overlap_m <= 0.0 || distance_sq == 0.0) {
-      // Out of contact: forces vanish and the history is forgotten. A pair already cleared (its
-      // overlap slot is exactly 0; a rebuild marks every slot -1) needs no writes.
-      if (pair_overlap_m_[k] != 0.0) {
-        pair_overlap_m_[k] = 0.0;
-        pair_history_[k] = ContactHistory{};
-        pair_force_on_i_n_[k].setZero();
-        pair_torque_i_n_m_[k].setZero();
-        pair_torque_j_n_m_[k].setZero();
-        pair_normal_stiffness_n_m_[k] = 0.0;
-        pair_tangential_stiffness_n_m_[k] = 0.0;
-      }
-      continue;
+    particles_.force_n[i] += pair_force_on_i_n_[k];
+    particles_.torque_n_m[i] += pair_torque_i_n_m_[k];
+    particles_.force_n[j] -= pair_force_on_i_n_[k];
+    particles_.torque_n_m[j] += pair_torque_j_n_m_[k];
+  }
+  for (int p = 0; p < n; ++p) {
+    for (int w = 0; w < walls; ++w) {
+      particles_.force_n[p] += WallForce(p, w, particles_.torque_n_m[p]);
     }
-    pair_overlap_m_[k] = overlap_m;
-    ContactKinematics kin;
-    kin.normal = separation / distance_m;
-    kin.overlap_m = overlap_m;
-    kin.effective_radius_m = g.radius_m[i] * g.radius_m[j] / (g.radius_m[i] + g.radius_m[j]);
-    kin.effective_mass_kg = g.mass_kg[i] * g.mass_kg[j] / (g.mass_kg[i] + g.mass_kg[j]);
-    // Contact point in the middle of the overlap, so the arms add up to the centre distance and
-    // the pair conserves angular momentum exactly.
-    kin.arm_i_m = g.radius_m[i] - 0.5 * overlap_m;
-    kin.arm_j_m = g.radius_m[j] - 0.5 * overlap_m;
-    kin.contact_velocity_m_s =
-        g.velocity_m_s[i] - g.velocity_m_s[j] -
-        (kin.arm_i_m * g.angular_velocity_rad_s[i] + kin.arm_j_m * g.angular_velocity_rad_s[j])
-            .cross(kin.normal);
-    // In a deforming cell the images move apart with the affine field as well.
-    if (deforming_) kin.contact_velocity_m_s += velocity_gradient_1_s_ * separation;
-    kin.relative_spin_rad_s = g.angular_velocity_rad_s[i] - g.angular_velocity_rad_s[j];
-    const ContactResult result = model_.Evaluate(kin, time_step_s_, pair_history_[k]);
-    pair_normal_stiffness_n_m_[k] = result.normal_stiffness_n_m;
-    pair_tangential_stiffness_n_m_[k] = result.sliding ? 0.0 : result.tangential_stiffness_n_m;
-    pair_force_on_i_n_[k] = result.force_on_i_n;
-    pair_torque_i_n_m_[k] = result.torque_on_i_n_m;
-    pair_torque_j_n_m_[k] = result.torque_on_j_n_m;
   }
 }
 
@@ -270,8 +318,12 @@ void Simulation::SumParticleForces() {
 
 void Simulation::ComputeForces() {
   if (neighbors_.NeedsRebuild(particles_, cell_, params_.threads)) Rebuild();
-  ComputePairForces();
-  SumParticleForces();
+  if (params_.threads == 1) {
+    ComputeAndSumForcesOneThread();
+  } else {
+    ComputePairForces();
+    SumParticleForces();
+  }
   forces_valid_ = true;
 }
 
@@ -592,6 +644,7 @@ void Simulation::RestoreState(const std::string& bytes) {
   pair_normal_stiffness_n_m_ = std::move(k_n);
   pair_tangential_stiffness_n_m_ = std::move(k_t);
   wall_history_ = std::move(wall_history);
+  ComputePairConstants();
   forces_valid_ = has_contacts != 0;
   SetVelocityGradient(velocity_gradient_1_s);
 }

@@ -95,11 +95,16 @@ class Simulation {
 
  private:
   void Rebuild();
+  // Fills the per-pair constants (r_e, m*) for the current neighbour list.
+  void ComputePairConstants();
   // The lattice reduction of reduce_sheared_cell: new edges = edges M, M integer with det 1.
   // Returns M (the identity when nothing changed).
   Eigen::Matrix3i ReduceCellEdges();
   void ComputeForces();
+  // Evaluates pair k into its slots; false (slots cleared) when the pair is open.
+  bool EvaluatePair(int k);
   void ComputePairForces();
+  void ComputeAndSumForcesOneThread();
   void SumParticleForces();
   Vec3 WallForce(int p, int w, Vec3& torque_n_m);
   void HalfKick();
@@ -117,6 +122,8 @@ class Simulation {
   int cell_reduction_count_ = 0;
   bool forces_valid_ = false;
   // Per-pair state, aligned with neighbors_.pairs().
+  std::vector<double> pair_effective_radius_m_;  // r_i r_j / (r_i + r_j), fixed per list
+  std::vector<double> pair_effective_mass_kg_;   // m_i m_j / (m_i + m_j), fixed per list
   std::vector<ContactHistory> pair_history_;
   std::vector<double> pair_overlap_m_;
   std::vector<Vec3> pair_force_on_i_n_;

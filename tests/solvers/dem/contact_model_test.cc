@@ -199,5 +199,29 @@ TEST(ContactModel, FusedSeedPathEqualsTheGeneralPath) {
   EXPECT_FALSE(eepa.fused());
 }
 
+// The paired rotation of the two history vectors gives the bits of two single rotations: for
+// random vectors, one already in the plane (no normal part: unchanged), one along the normal
+// (at most round-off left in the plane), and the zero vector.
+TEST(ContactModel, PairedHistoryRotationEqualsTwoSingleOnes) {
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Vec3 normal = Vec3(unit(random), unit(random), unit(random)).normalized();
+    Vec3 first = 2e-7 * Vec3(unit(random), unit(random), unit(random));
+    Vec3 second = 2e-3 * Vec3(unit(random), unit(random), unit(random));
+    if (trial % 4 == 1) second = 3e-3 * normal;
+    if (trial % 4 == 2) first -= first.dot(normal) * normal;
+    if (trial % 4 == 3) first.setZero();
+    if (trial % 4 == 2 && first.dot(normal) != 0.0) continue;  // rounding left a normal part
+    Vec3 first_single = first;
+    Vec3 second_single = second;
+    ProjectOntoContactPlane(normal, first_single);
+    ProjectOntoContactPlane(normal, second_single);
+    ProjectTwoOntoContactPlane(normal, first, second);
+    ASSERT_EQ(first, first_single) << trial;
+    ASSERT_EQ(second, second_single) << trial;
+  }
+}
+
 }  // namespace
 }  // namespace gonogo::dem

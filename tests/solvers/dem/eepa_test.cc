@@ -194,7 +194,6 @@ TEST(EepaNormal, ReloadingFromTheAdhesiveBranchFollowsAParallelK2Line) {
 TEST(EepaNormal, EnergyAlongAParallelLineIsTheIntegralOfItsForce) {
   const EepaParams p = StickySoil();
   const EepaNormal law(p);
-  const Expected e = ExpectedFor(p, kMaxOverlapM);
   const double line_max_m = 0.6 * kMaxOverlapM;
   // U(d) = integral of F(s) from 0 to d along the lower line and the adhesive branch of d_max:
   // midpoint rule on 2e5 intervals against the closed-form-plus-bisection energy.
