@@ -217,17 +217,25 @@ EepaNormal::Branches EepaNormal::BranchesFor(double max_overlap_m,
   b.k2 = b.k1 / (1.0 - params_.plasticity_ratio);  // lambda_p = 1 - k1/k2
   // d_p = (1 - k1/k2)^{1/n} d_max, so d_p^n = lambda_p d_max^n.
   b.plastic_overlap_pow_n = params_.plasticity_ratio * Power(max_overlap_m, n);
-  // Pull below f0 grows with the plastic contact patch: 3/2 pi Delta_gamma a_p, a_p^2 = r_e d_p.
+  // (E5) Pull below f0, 3/2 pi Delta_gamma a_p, a_p the radius of the circle in which the two
+  // undeformed spheres meet at the plastic overlap d_p: a_p^2 = 2 r_e d_p to first order in
+  // d_p / r (LIGGGHTS normal_model_edinburgh.h takes it exactly from r_i and r_j).
   const double plastic_overlap_m = plastic_overlap_factor_ * max_overlap_m;
-  const double pull_n =
-      1.5 * kPi * params_.surface_energy_j_m2 * std::sqrt(effective_radius_m * plastic_overlap_m);
-  // The unloading branch reaches f_min = f0 - pull at d_min^n = d_p^n - pull / k2.
-  b.min_overlap_pow_n = b.plastic_overlap_pow_n - pull_n / b.k2;
-  b.has_adhesive_branch = pull_n == 0.0 || b.min_overlap_pow_n > 0.0;
-  b.k_adh = 0.0;
-  if (pull_n > 0.0 && b.has_adhesive_branch) {
-    b.k_adh = pull_n / Power(b.min_overlap_pow_n, params_.tensile_exponent / n);
+  double pull_n = 1.5 * kPi * params_.surface_energy_j_m2 *
+                  std::sqrt(2.0 * effective_radius_m * plastic_overlap_m);
+  // (E6) The unloading line reaches f_min = f0 - pull at d_min^n = d_p^n - pull / k2; a pull
+  // above half of the line's pull at separation, k2 d_p^n / 2, is capped there with d_min = d_p / 2
+  // (as LIGGGHTS does), so d_min > 0 always.
+  const double pull_cap_n = 0.5 * b.k2 * b.plastic_overlap_pow_n;
+  b.pull_capped = pull_n > pull_cap_n;
+  if (b.pull_capped) {
+    pull_n = pull_cap_n;
+    b.min_overlap_pow_n = Power(0.5 * plastic_overlap_m, n);
+  } else {
+    b.min_overlap_pow_n = b.plastic_overlap_pow_n - pull_n / b.k2;
   }
+  // (E7) The adhesive branch f0 - k_adh d^chi passes through (d_min, f0 - pull).
+  b.k_adh = pull_n > 0.0 ? pull_n / Power(b.min_overlap_pow_n, params_.tensile_exponent / n) : 0.0;
   return b;
 }
 
@@ -263,7 +271,7 @@ EepaNormal::BranchResponse EepaNormal::ForceOnBranch(double overlap_m, double ma
   // Unloading/reloading f0 + k2 (d^n - d_p^n) down to the adhesive branch f0 - k_adh d^chi.
   const double d_pow_chi = Power(overlap_m, chi);
   const double adhesive_n = -b.k_adh * d_pow_chi;
-  if (!b.has_adhesive_branch || unloading_n >= adhesive_n) {
+  if (unloading_n >= adhesive_n) {
     return {{f0 + unloading_n, n * b.k2 * d_pow_n / overlap_m, loading_stiffness_n_m},
             Branch::kLine};
   }
@@ -289,37 +297,38 @@ double EepaNormal::UnloadingEnergyJ(double overlap_m, double max_overlap_m,
   auto unloading_j = [&](double s) {
     return b.k2 * (Power(s, n + 1.0) / (n + 1.0) - line_plastic_pow_n * s);
   };
-  if (!b.has_adhesive_branch) return f0 * overlap_m + unloading_j(overlap_m);
-  // Adhesive branch -k_adh s^chi below the crossing s_x, the line above it. On the line of d_max
-  // s_x = d_min; on a lower line s_x solves k2 (s^n - d_p^n) + k_adh s^chi = 0, whose left side
-  // rises with s from -k2 d_p^n < 0 at s = 0 to k_adh d_p^chi >= 0 at s = d_p (bisection).
-  double crossing_m = std::pow(std::max(b.min_overlap_pow_n, 0.0), 1.0 / n);
-  if (line_max_overlap_m < max_overlap_m) {
-    double low_m = 0.0, high_m = std::pow(line_plastic_pow_n, 1.0 / n);
-    for (int i = 0; i < 200 && high_m - low_m > 1e-15 * high_m; ++i) {
-      const double mid_m = 0.5 * (low_m + high_m);
-      const double gap_n =
-          b.k2 * (Power(mid_m, n) - line_plastic_pow_n) + b.k_adh * Power(mid_m, chi);
-      (gap_n < 0.0 ? low_m : high_m) = mid_m;
-    }
-    crossing_m = 0.5 * (low_m + high_m);
-  }
+  // Adhesive branch -k_adh s^chi below the crossing s_x, the line above it.
+  const double crossing_m =
+      CrossingOverlapM(b, line_plastic_pow_n, line_max_overlap_m < max_overlap_m);
   const double s = std::min(overlap_m, crossing_m);
   double energy_j = f0 * overlap_m - b.k_adh * Power(s, chi + 1.0) / (chi + 1.0);
   if (overlap_m > crossing_m) energy_j += unloading_j(overlap_m) - unloading_j(crossing_m);
   return energy_j;
 }
 
+double EepaNormal::CrossingOverlapM(const Branches& b, double line_plastic_pow_n,
+                                    bool lower_line) const {
+  const double n = params_.slope_exponent, chi = params_.tensile_exponent;
+  // On the line of d_max with an uncapped pull the two meet at d_min by construction (E6, E7).
+  if (!lower_line && !b.pull_capped) return std::pow(b.min_overlap_pow_n, 1.0 / n);
+  // Otherwise s_x solves k2 (s^n - d_p^n) + k_adh s^chi = 0, whose left side rises with s from
+  // -k2 d_p^n <= 0 at s = 0 to k_adh d_p^chi >= 0 at s = d_p (bisection).
+  double low_m = 0.0, high_m = std::pow(line_plastic_pow_n, 1.0 / n);
+  for (int i = 0; i < 200 && high_m - low_m > 1e-15 * high_m; ++i) {
+    const double mid_m = 0.5 * (low_m + high_m);
+    const double gap_n =
+        b.k2 * (Power(mid_m, n) - line_plastic_pow_n) + b.k_adh * Power(mid_m, chi);
+    (gap_n < 0.0 ? low_m : high_m) = mid_m;
+  }
+  return 0.5 * (low_m + high_m);
+}
+
 double EepaNormal::MinimumForceN(double max_overlap_m, double effective_radius_m) const {
   const Branches b = BranchesFor(max_overlap_m, effective_radius_m);
-  // With an adhesive branch the minimum is at d_min, f0 - k_adh d_min^chi; without, the unloading
-  // branch is still falling at separation, f0 - k2 d_p^n.
-  if (b.has_adhesive_branch) {
-    return params_.pull_off_force_n -
-           b.k_adh * std::pow(std::max(b.min_overlap_pow_n, 0.0),
-                              params_.tensile_exponent / params_.slope_exponent);
-  }
-  return params_.pull_off_force_n - b.k2 * b.plastic_overlap_pow_n;
+  // F = f0 + max(rising line, falling adhesive branch) is lowest where they cross: at d_min,
+  // f0 - pull, unless the pull was capped (then the line crosses the branch above d_min).
+  const double crossing_m = CrossingOverlapM(b, b.plastic_overlap_pow_n, false);
+  return params_.pull_off_force_n - b.k_adh * Power(crossing_m, params_.tensile_exponent);
 }
 
 NormalResponse EepaNormal::Evaluate(double overlap_m, double effective_radius_m) const {

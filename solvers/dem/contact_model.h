@@ -244,9 +244,10 @@ EepaParams Seed001EepaSoil(const std::string& name);
 // the three branches of the paper in one expression: loading f0 + k1 d^n, unloading/reloading
 // f0 + k2 (d^n - d_p^n), adhesive f0 - k_adh d^chi.
 // k_adh makes the adhesive branch meet the unloading line of d_max at the minimum force
-//   f_min = f0 - 3/2 pi Delta_gamma a_p,  a_p = sqrt(r_e d_p(d_max)),
-// reached at d_min^n = d_p^n - (f0 - f_min) / k2, so k_adh = (f0 - f_min) / d_min^chi. When
-// d_min^n <= 0 the unloading branch reaches d = 0 first and there is no adhesive branch.
+// f_min = f0 - pull, pull = 3/2 pi Delta_gamma a_p, a_p^2 = 2 r_e d_p(d_max) (the circle in which
+// the undeformed spheres meet at d_p), reached at d_min^n = d_p^n - pull / k2, so
+// k_adh = pull / d_min^chi; a pull above k2 d_p^n / 2 is capped there with d_min = d_p / 2 (as
+// LIGGGHTS' model edinburgh, against which this law is tested).
 // A contact that reloads from the adhesive branch does so along the k2 line through its point,
 // parallel to the first one (seed 001 sec. 5.2): d_L drops to where that line meets k1 d^n.
 // Sources and choices: solvers/dem/README.md.
@@ -279,7 +280,7 @@ class EepaNormal : public NormalModel {
   double LoadingStiffness(double effective_radius_m) const;
   // dF/dd of the loading branch, n k1 d^{n-1} (N/m).
   double LoadingBranchStiffness(double overlap_m, double effective_radius_m) const;
-  // Most negative force f_min after loading to max_overlap_m (= f0 without adhesion).
+  // Most negative force after loading to max_overlap_m (= f0 without adhesion).
   double MinimumForceN(double max_overlap_m, double effective_radius_m) const;
 
  private:
@@ -287,11 +288,14 @@ class EepaNormal : public NormalModel {
   struct Branches {
     double k1, k2;                 // N/m^n
     double plastic_overlap_pow_n;  // d_p^n
-    double min_overlap_pow_n;      // d_min^n
-    bool has_adhesive_branch;      // false when d_min^n <= 0 and Delta_gamma > 0
+    double min_overlap_pow_n;      // d_min^n (> 0 when d_p > 0)
+    bool pull_capped;              // pull capped at k2 d_p^n / 2, d_min = d_p / 2
     double k_adh;                  // N/m^chi
   };
   Branches BranchesFor(double max_overlap_m, double effective_radius_m) const;
+  // Overlap at which the k2 line with plastic overlap^n line_plastic_pow_n meets the adhesive
+  // branch of b (lower_line: a line below that of d_max).
+  double CrossingOverlapM(const Branches& b, double line_plastic_pow_n, bool lower_line) const;
   enum class Branch { kLoading, kLine, kAdhesive };
   struct BranchResponse {
     NormalResponse response;
