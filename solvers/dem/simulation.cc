@@ -401,13 +401,10 @@ double Simulation::KineticEnergyJ() const {
 
 double Simulation::ElasticNormalEnergyJ() const {
   double energy_j = 0.0;
-  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
   for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
     if (pair_overlap_m_[k] <= 0.0) continue;
-    const double r_i = particles_.radius_m[pairs[k].i];
-    const double r_j = particles_.radius_m[pairs[k].j];
-    energy_j += model_.normal().ElasticEnergyWithHistoryJ(pair_overlap_m_[k], r_i * r_j / (r_i + r_j),
-                                                          pair_history_[k]);
+    energy_j += model_.normal().ElasticEnergyWithHistoryJ(
+        pair_overlap_m_[k], pair_effective_radius_m_[k], pair_history_[k]);
   }
   for (std::size_t p = 0; p < particles_.size(); ++p) {
     for (std::size_t w = 0; w < params_.walls.size(); ++w) {

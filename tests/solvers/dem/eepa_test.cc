@@ -641,12 +641,21 @@ TEST(EepaNormal, MatchesTheLiggghtsEdinburghModel) {
                    "/tests/solvers/dem/data/liggghts_edinburgh.csv");
   ASSERT_TRUE(in) << "liggghts_edinburgh.csv not found (GONOGO_SOURCE_DIR)";
   struct Case {
-    double surface_energy_j_m2, tensile_exponent;
-    int rows = 0;
+    EepaParams params;
+    EepaNormal law;
+    ContactHistory history;
+    int rows;
   };
-  std::map<std::string, Case> cases = {
-      {"table3", {7.0, 1.5}}, {"strong", {5000.0, 2.0}}, {"capped", {5.0e5, 1.5}}};
-  std::map<std::string, ContactHistory> histories;
+  auto fgs_with = [](double surface_energy_j_m2, double tensile_exponent) {
+    EepaParams p = Seed001EepaSoil("FGS");
+    p.surface_energy_j_m2 = surface_energy_j_m2;
+    p.tensile_exponent = tensile_exponent;
+    return Case{p, EepaNormal(p), ContactHistory{}, 0};
+  };
+  std::map<std::string, Case> cases;
+  cases.emplace("table3", fgs_with(7.0, 1.5));
+  cases.emplace("strong", fgs_with(5000.0, 2.0));
+  cases.emplace("capped", fgs_with(5.0e5, 1.5));
   std::string line;
   std::getline(in, line);
   ASSERT_EQ(line, "case,overlap_m,force_n");
@@ -656,27 +665,24 @@ TEST(EepaNormal, MatchesTheLiggghtsEdinburghModel) {
     std::getline(ss, name, ',');
     std::getline(ss, overlap, ',');
     std::getline(ss, force, ',');
-    ASSERT_EQ(cases.count(name), 1u) << line;
-    Case& c = cases[name];
-    EepaParams p = Seed001EepaSoil("FGS");
-    p.surface_energy_j_m2 = c.surface_energy_j_m2;
-    p.tensile_exponent = c.tensile_exponent;
-    const EepaNormal law(p);
-    ContactHistory& history = histories[name];
+    const auto found = cases.find(name);
+    ASSERT_NE(found, cases.end()) << line;
+    Case& c = found->second;
     const double overlap_m = std::atof(overlap.c_str());
     const double liggghts_n = std::atof(force.c_str());
-    const double gonogo_n = law.EvaluateWithHistory(overlap_m, kEffectiveRadiusM, history).force_n;
+    const double gonogo_n =
+        c.law.EvaluateWithHistory(overlap_m, kEffectiveRadiusM, c.history).force_n;
     // The pull of the largest flattening so far, 3/2 pi Delta_gamma a_p (capped at k2 d_p^n / 2).
-    const Expected e = ExpectedFor(p, history.max_overlap_m);
+    const Expected e = ExpectedFor(c.params, c.history.max_overlap_m);
     const double pull_tolerance_n =
         4e-3 * std::min(e.pull_n, 0.5 * e.k2 * std::pow(e.plastic_m, 1.5));
     ASSERT_NEAR(gonogo_n, liggghts_n, 1e-9 * std::abs(liggghts_n) + pull_tolerance_n)
         << name << " row " << c.rows << " overlap " << overlap_m;
     ++c.rows;
   }
-  EXPECT_EQ(cases["table3"].rows, 179);
-  EXPECT_EQ(cases["strong"].rows, 179);
-  EXPECT_EQ(cases["capped"].rows, 149);
+  EXPECT_EQ(cases.at("table3").rows, 179);
+  EXPECT_EQ(cases.at("strong").rows, 179);
+  EXPECT_EQ(cases.at("capped").rows, 149);
 }
 
 }  // namespace
