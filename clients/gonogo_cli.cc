@@ -37,6 +37,7 @@ const char* kUsage =
     "            [--design-slip S] [--max-slip S] [--go-margin M] [--slip-step S] [--no-wait]\n"
     "            rasters are GeoTIFFs: cone index in kPa, slope in percent, elevation in m\n"
     "  jobs      [--limit N]                 list jobs, newest first\n"
+    "  tiers                                 the server's traction tiers: model, inputs, cost\n"
     "  watch     ID                          follow a job's progress until it ends\n"
     "  cancel    ID                          cancel a queued or running job\n"
     "  download  ID --out DIR                fetch a finished job's products\n"
@@ -314,6 +315,22 @@ int Jobs(Client& client, const Args& a) {
   return 0;
 }
 
+int Tiers(Client& client, const Args&) {
+  grpc::ClientContext ctx;
+  v1::ListTiersResponse resp;
+  const grpc::Status s = client.stub().ListTiers(&ctx, v1::ListTiersRequest{}, &resp);
+  if (!s.ok()) return Fail(s);
+  for (const auto& t : resp.tiers()) {
+    std::cout << t.name() << " (" << t.version() << ")\n"
+              << "  model:  " << t.summary() << "\n"
+              << "  reads:  " << t.reads() << "\n"
+              << "  needs:  " << t.ranks() << (t.ranks() == 1 ? " rank, " : " ranks, ")
+              << t.threads() << (t.threads() == 1 ? " thread" : " threads") << " per curve\n"
+              << "  cost:   " << t.typical_cost() << "\n";
+  }
+  return 0;
+}
+
 int Watch(Client& client, const Args& a) {
   if (a.positional.size() != 1) throw UsageError("watch needs one job id");
   v1::JobStatus last;
@@ -576,6 +593,7 @@ int main(int argc, char** argv) {
     Client client(server);
     if (command == "map") return Map(client, a);
     if (command == "jobs") return Jobs(client, a);
+    if (command == "tiers") return Tiers(client, a);
     if (command == "watch") return Watch(client, a);
     if (command == "cancel") return Cancel(client, a);
     if (command == "download") return Download(client, a);

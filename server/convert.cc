@@ -1,5 +1,7 @@
 #include "server/convert.h"
 
+#include <algorithm>
+
 #include "solvers/common/errors.h"
 
 namespace gonogo::server {
@@ -123,6 +125,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   r->set_wheel_load_n(t.request.wheel_load_n);
   *r->mutable_soil() = ToProto(t.request.soil);
   for (double s : t.request.slips) w.add_slips(s);
+  w.set_threads(t.needs.threads);
   return w;
 }
 
@@ -135,6 +138,8 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.request.wheel_load_n = w.request().wheel_load_n();
   t.request.soil = FromProto(w.request().soil());
   t.request.slips.assign(w.slips().begin(), w.slips().end());
+  t.needs.ranks = std::max(1, w.group_ranks_size());
+  t.needs.threads = std::max(1, w.threads());
   return t;
 }
 
@@ -144,6 +149,8 @@ v1::WorkerResult ToWorkerResult(const TaskResult& r) {
   w.set_ok(r.ok);
   w.set_cancelled(r.cancelled);
   w.set_error(r.error);
+  w.set_error_kind(static_cast<int32_t>(r.error_kind));
+  w.set_error_field(r.error_field);
   w.set_tier_version(r.curve.tier_version);
   w.set_compute_seconds(r.compute_seconds);
   w.set_immobile_reason(r.curve.immobile_reason);
@@ -158,6 +165,11 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   r.ok = w.ok();
   r.cancelled = w.cancelled();
   r.error = w.error();
+  r.error_kind = w.error_kind() >= 0 && w.error_kind() <= static_cast<int32_t>(ErrorKind::kInternal)
+                     ? static_cast<ErrorKind>(w.error_kind())
+                     : ErrorKind::kInternal;
+  if (!r.ok && r.error_kind == ErrorKind::kNone) r.error_kind = ErrorKind::kInternal;
+  r.error_field = w.error_field();
   r.curve.tier = tier;
   r.curve.tier_version = w.tier_version();
   r.curve.immobile_reason = w.immobile_reason();

@@ -9,6 +9,7 @@
 #include "cache/curve_key.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
+#include "server/curve_resolver.h"
 #include "server/geo/products.h"
 #include "server/map_plan.h"
 #include "server/summary.h"
@@ -81,14 +82,6 @@ std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
   return out;
 }
 
-// Results of one job's tasks, filled by pool threads and drained by the scheduler thread. Shared, so
-// that late callbacks after the job returned land harmlessly.
-struct Inbox {
-  std::mutex mutex;
-  std::condition_variable arrived;
-  std::deque<TaskResult> results;
-};
-
 }  // namespace
 
 struct JobManager::Live {
@@ -99,8 +92,8 @@ struct JobManager::Live {
 };
 
 JobManager::JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
-                       WorkerPool& pool)
-    : config_(std::move(config)), db_(db), jobs_(db), curves_(db), tiers_(tiers), pool_(pool) {
+                       CurveResolver& resolver)
+    : config_(std::move(config)), db_(db), jobs_(db), tiers_(tiers), resolver_(resolver) {
   fs::create_directories(fs::path(config_.data_dir) / "jobs");
 }
 
@@ -216,7 +209,9 @@ int JobManager::ResumeUnfinished() {
 }
 
 void JobManager::Start() {
-  thread_ = std::thread([this] { Loop(); });
+  for (int i = 0; i < std::max(1, config_.max_concurrent_jobs); ++i) {
+    threads_.emplace_back([this] { Loop(); });
+  }
 }
 
 void JobManager::Drain() {
@@ -225,7 +220,8 @@ void JobManager::Drain() {
     stopping_ = true;
   }
   changed_.notify_all();
-  if (thread_.joinable()) thread_.join();
+  for (std::thread& t : threads_) t.join();
+  threads_.clear();
 }
 
 void JobManager::Loop() {
@@ -362,95 +358,65 @@ void JobManager::RunJob(const std::string& id) {
     const MapPlan plan = PlanMap(*terrain, vehicle, SoilTableOf(request.soil_table()), tier, slips);
     const size_t total = plan.tasks.size();
     std::vector<TractionCurve> curves(total);
-    std::vector<bool> resolved(total, false);
     size_t done = 0, hits = 0, similar = 0;
     double smallest_ratio = 1;
-    for (size_t i = 0; i < total; ++i) {
-      auto found = LookUpCurve(curves_, tier, plan.tasks[i], plan.task_keys[i],
-                               !request.disable_similarity());
-      if (!found) continue;
-      curves[i] = std::move(found->curve);
-      resolved[i] = true;
-      ++done;
-      if (found->similarity) {
-        ++similar;
-        smallest_ratio = std::min(
-            {smallest_ratio, found->scale_ratio, 1.0 / found->scale_ratio});
-      } else {
-        ++hits;
-      }
-    }
-    status.set_tasks_total(static_cast<uint32_t>(total));
-    status.set_tasks_done(static_cast<uint32_t>(done));
-    status.set_cache_hits(static_cast<uint32_t>(hits));
-    status.set_similarity_hits(static_cast<uint32_t>(similar));
-    status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
-    report(std::to_string(plan.units.size()) + " terrain units, " + std::to_string(total) +
-               " traction tasks, " + std::to_string(hits) + " from the cache, " +
-               std::to_string(similar) + " from similar tyres",
-           true);
-
-    // Dispatch the misses.
-    auto inbox = std::make_shared<Inbox>();
-    std::map<uint64_t, size_t> outstanding;  // pool task id -> task index
-    for (size_t i = 0; i < total; ++i) {
-      if (resolved[i]) continue;
-      TaskSpec spec{next_task_id_++, tier.Name(), plan.tasks[i], config_.task_delay_ms};
-      outstanding[spec.task_id] = i;
-      pool_.Submit(std::move(spec), [inbox](TaskResult r) {
-        std::lock_guard<std::mutex> lock(inbox->mutex);
-        inbox->results.push_back(std::move(r));
-        inbox->arrived.notify_one();
-      });
-    }
-
     std::map<std::string, int64_t> computed_by;
     std::string failure;
-    bool cancels_sent = false;
     auto last_persist = std::chrono::steady_clock::now();
-    while (!outstanding.empty()) {
-      std::deque<TaskResult> batch;
-      {
-        std::unique_lock<std::mutex> lock(inbox->mutex);
-        inbox->arrived.wait_for(lock, std::chrono::milliseconds(200),
-                                [&] { return !inbox->results.empty(); });
-        batch.swap(inbox->results);
-      }
-      for (TaskResult& r : batch) {
-        auto it = outstanding.find(r.task_id);
-        if (it == outstanding.end()) continue;
-        const size_t i = it->second;
-        outstanding.erase(it);
-        if (r.ok) {
-          r.curve.tier = tier.Name();
-          cache::StoredCurve stored{plan.task_keys[i], plan.tasks[i], r.curve, r.computed_by,
-                                    r.compute_seconds, NowMs()};
-          curves_.Put(stored);  // committed now: a crash loses no finished curve
-          curves[i] = std::move(r.curve);
-          resolved[i] = true;
-          computed_by[r.computed_by]++;
-          ++done;
-        } else if (!r.cancelled && failure.empty()) {
-          failure = "traction task failed (" + tier.Name() + ", cone index " +
-                    std::to_string(plan.tasks[i].soil.cone_index_pa) + " Pa): " + r.error;
-        }
-      }
-      bool stopping;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stopping = stopping_;
-      }
-      if ((stopping || live->cancel_requested || !failure.empty()) && !cancels_sent) {
-        for (const auto& [task_id, _] : outstanding) pool_.Cancel(task_id);
-        cancels_sent = true;
-      }
+    auto show_progress = [&](bool force) {
       status.set_tasks_done(static_cast<uint32_t>(done));
       status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
-      const bool persist = std::chrono::steady_clock::now() - last_persist > std::chrono::milliseconds(250);
+      const bool persist =
+          force || std::chrono::steady_clock::now() - last_persist > std::chrono::milliseconds(250);
       if (persist) last_persist = std::chrono::steady_clock::now();
       report("computing traction curves: " + std::to_string(done) + "/" + std::to_string(total),
              persist);
-    }
+    };
+    ResolveOptions options;
+    options.allow_similarity = !request.disable_similarity();
+    options.debug_delay_ms = config_.task_delay_ms;
+    options.stop_on_failure = true;
+    options.stop = [&] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return stopping_ || live->cancel_requested.load();
+    };
+    options.after_lookups = [&](const std::vector<Resolution>& found) {
+      for (const Resolution& r : found) {
+        if (!r.ok()) continue;
+        ++done;
+        if (r.source == CurveSource::kCacheSimilar) {
+          ++similar;
+          smallest_ratio =
+              std::min({smallest_ratio, r.cached->scale_ratio, 1.0 / r.cached->scale_ratio});
+        } else {
+          ++hits;
+        }
+      }
+      status.set_tasks_total(static_cast<uint32_t>(total));
+      status.set_tasks_done(static_cast<uint32_t>(done));
+      status.set_cache_hits(static_cast<uint32_t>(hits));
+      status.set_similarity_hits(static_cast<uint32_t>(similar));
+      status.set_fraction_done(0.05 + 0.85 * (total ? double(done) / total : 1.0));
+      report(std::to_string(plan.units.size()) + " terrain units, " + std::to_string(total) +
+                 " traction tasks, " + std::to_string(hits) + " from the cache, " +
+                 std::to_string(similar) + " from similar tyres",
+             true);
+    };
+    options.on_task_end = [&](size_t i, const Resolution& r) {
+      if (r.source == CurveSource::kComputed) {
+        computed_by[r.stored.computed_by]++;
+        ++done;
+      } else if (r.source == CurveSource::kFailed && failure.empty()) {
+        failure = "traction task failed (" + tier.Name() + ", cone index " +
+                  std::to_string(plan.tasks[i].soil.cone_index_pa) + " Pa, " +
+                  ErrorKindName(r.error_kind) + "): " + r.error;
+      }
+      show_progress(false);
+    };
+    std::vector<CurveTask> tasks(total);
+    for (size_t i = 0; i < total; ++i) tasks[i] = CurveTask{plan.tasks[i], plan.task_keys[i]};
+    std::vector<Resolution> resolved = resolver_.Resolve(tier, tasks, options);
+    for (size_t i = 0; i < total; ++i) curves[i] = std::move(resolved[i].curve);
 
     bool stopping;
     {
@@ -472,7 +438,7 @@ void JobManager::RunJob(const std::string& id) {
     report("writing products", false);
     const fs::path out_dir = fs::path(JobDir(id)) / "out";
     fs::create_directories(out_dir);
-    SummaryInputs si{id, request, tier.Name(), tier.Version(), pool_.Describe(), plan, *terrain,
+    SummaryInputs si{id, request, tier.Name(), tier.Version(), resolver_.pool().Describe(), plan, *terrain,
                      verdicts, total, total - hits - similar, hits, similar, smallest_ratio,
                      computed_by, vci_pa, criteria,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};

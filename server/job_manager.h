@@ -1,10 +1,12 @@
 // Map jobs on rank 0: persistence, the scheduler thread, progress for watchers, cancellation, resume
 // after a restart and draining on SIGTERM (ARCHITECTURE sections 2 and 5).
 //
-// One scheduler thread runs jobs in submission order. For each job it plans the traction tasks (one per
-// terrain unit and axle), answers what it can from the cache, sends the rest to the worker pool,
-// commits every finished curve to SQLite as it arrives, then evaluates every cell and writes the
-// products. gRPC handlers only enqueue and read status; they never wait for a solver.
+// Up to max_concurrent_jobs scheduler threads take jobs in submission order. For each job one plans
+// the traction tasks (one per terrain unit and axle) and hands them to the CurveResolver (cache,
+// then the worker pool, every finished curve committed as it arrives), then evaluates every cell and
+// writes the products. Jobs running at once share the pool, whose two-lane queue keeps a long job's
+// tasks from blocking a short one's. gRPC handlers only enqueue and read status; they never wait for
+// a solver.
 #pragma once
 
 #include <atomic>
@@ -22,6 +24,7 @@
 #include "cache/database.h"
 #include "cache/job_store.h"
 #include "gonogo/v1/mobility.pb.h"
+#include "server/curve_resolver.h"
 #include "server/geo/terrain.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
@@ -31,6 +34,7 @@ namespace gonogo::server {
 struct JobManagerConfig {
   std::string data_dir;
   uint32_t task_delay_ms = 0;   // fault-injection delay added to every task (tests, demos)
+  int max_concurrent_jobs = 2;  // map jobs that run at once; the rest wait QUEUED
   geo::GeoLimits limits;
 };
 
@@ -42,7 +46,7 @@ struct JobInputs {
 class JobManager {
  public:
   JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
-             WorkerPool& pool);
+             CurveResolver& resolver);
   ~JobManager();
 
   // Directory for a new job's inputs, and a fresh job id.
@@ -84,17 +88,15 @@ class JobManager {
   JobManagerConfig config_;
   cache::Database& db_;
   cache::JobStore jobs_;
-  cache::CurveStore curves_;
   const TierRegistry& tiers_;
-  WorkerPool& pool_;
+  CurveResolver& resolver_;
 
   std::mutex mutex_;
   std::condition_variable changed_;     // any job status changed, or a job was queued
   std::deque<std::string> queue_;
   std::map<std::string, std::shared_ptr<Live>> live_;
   bool stopping_ = false;
-  std::thread thread_;
-  std::atomic<uint64_t> next_task_id_{1};
+  std::vector<std::thread> threads_;
 };
 
 }  // namespace gonogo::server

@@ -27,6 +27,7 @@
 #include "server/service.h"
 #include "server/thread_pool.h"
 #include "solvers/tiers/builtin_tiers.h"
+#include "solvers/tiers/diagnostic_tiers.h"
 
 namespace {
 
@@ -39,17 +40,22 @@ struct Options {
   int threads = 0;  // 0: one per core
   uint32_t task_delay_ms = 0;
   int64_t max_cells = 25'000'000;
+  int max_jobs = 2;
+  bool diagnostic_tiers = false;
 };
 
 void Usage(std::ostream& out) {
   out << "usage: gonogo-server [--data-dir DIR] [--listen HOST:PORT] [--endpoint-file PATH]\n"
-         "                     [--threads N] [--max-cells N] [--task-delay-ms MS]\n"
+         "                     [--threads N] [--max-cells N] [--max-jobs N] [--task-delay-ms MS]\n"
+         "                     [--diagnostic-tiers]\n"
          "  --data-dir DIR       SQLite database and job files (default ./gonogo-data)\n"
          "  --listen HOST:PORT   gRPC address; port 0 picks a free port (default 127.0.0.1:50051)\n"
          "  --endpoint-file P    write the bound HOST:PORT to P (mode 0600)\n"
          "  --threads N          in-process worker threads when not under MPI (default: cores)\n"
          "  --max-cells N        largest raster, input or output, in cells (default 25000000)\n"
+         "  --max-jobs N         map jobs that run at once (default 2)\n"
          "  --task-delay-ms MS   delay every traction task (fault-injection tests and demos)\n"
+         "  --diagnostic-tiers   also serve the diagnostic tiers (rank-group and failure probes)\n"
          "Under mpirun or srun, rank 0 serves and ranks 1..N-1 compute traction tasks.\n";
 }
 
@@ -71,6 +77,8 @@ Options Parse(int argc, char** argv) {
       else if (a == "--threads") o.threads = std::stoi(value());
       else if (a == "--task-delay-ms") o.task_delay_ms = static_cast<uint32_t>(std::stoul(value()));
       else if (a == "--max-cells") o.max_cells = std::stoll(value());
+      else if (a == "--max-jobs") o.max_jobs = std::stoi(value());
+      else if (a == "--diagnostic-tiers") o.diagnostic_tiers = true;
       else if (a == "--help" || a == "-h") {
         Usage(std::cout);
         std::exit(0);
@@ -98,9 +106,12 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   config.task_delay_ms = o.task_delay_ms;
   config.limits.max_input_cells = o.max_cells;
   config.limits.max_output_cells = o.max_cells;
-  server::JobManager jobs(config, db, tiers, pool);
+  config.max_concurrent_jobs = o.max_jobs;
+  cache::CurveStore curves(db);
+  server::CurveResolver resolver(curves, pool);
+  server::JobManager jobs(config, db, tiers, resolver);
   const int resumed = jobs.ResumeUnfinished();
-  server::MobilityServiceImpl service(jobs, db, tiers, pool, server::ServiceLimits{});
+  server::MobilityServiceImpl service(jobs, db, tiers, resolver, server::ServiceLimits{});
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -162,6 +173,7 @@ int main(int argc, char** argv) {
 
   gonogo::TierRegistry tiers;
   gonogo::RegisterBuiltinTiers(tiers);
+  if (options.diagnostic_tiers) gonogo::RegisterDiagnosticTiers(tiers);
 
   if (!gonogo::server::LaunchedUnderMpi()) {
     const int threads =

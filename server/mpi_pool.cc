@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <map>
+#include <memory>
 #include <optional>
 
 #include "server/convert.h"
@@ -14,7 +16,7 @@ namespace gonogo::server {
 
 namespace {
 
-enum Tag : int { kTagTask = 1, kTagResult = 2, kTagCancel = 3, kTagStop = 4 };
+enum Tag : int { kTagTask = 1, kTagResult = 2, kTagCancel = 3, kTagStop = 4, kTagProgress = 5 };
 
 // Back-off for idle polling: 50 us doubling to 5 ms, reset by any message.
 class Backoff {
@@ -65,7 +67,7 @@ void MpiPool::Submit(TaskSpec task, TaskCallback done) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!stopping_) {
-      queue_.push_back(Entry{std::move(task), std::move(done)});
+      queue_.Push(Entry{std::move(task), std::move(done)});
       return;
     }
   }
@@ -77,10 +79,21 @@ void MpiPool::Cancel(uint64_t task_id) {
   cancels_.push_back(task_id);
 }
 
+namespace {
+
+std::string RanksLabel(const std::vector<int>& ranks) {
+  std::string label = ranks.size() == 1 ? "rank " : "ranks ";
+  for (size_t i = 0; i < ranks.size(); ++i) label += (i ? "," : "") + std::to_string(ranks[i]);
+  return label;
+}
+
+}  // namespace
+
 void MpiPool::CommLoop() {
-  // busy[w]: the task rank w is computing.
-  std::vector<std::optional<Entry>> busy(world_size_);
-  std::vector<bool> cancel_sent(world_size_, false);
+  // busy[w]: the task world rank w is working on (shared by the members of a group).
+  std::vector<std::shared_ptr<Running>> busy(world_size_);
+  std::map<uint64_t, std::shared_ptr<Running>> running;  // by task id
+  int next_group_tag = 1;
   Backoff backoff;
   for (;;) {
     std::vector<std::pair<int, std::string>> to_send;  // (rank, serialised task)
@@ -92,23 +105,37 @@ void MpiPool::CommLoop() {
       stopping = stopping_;
       cancels.swap(cancels_);
       for (uint64_t id : cancels) {
-        auto it = std::find_if(queue_.begin(), queue_.end(),
-                               [&](const Entry& e) { return e.task.task_id == id; });
-        if (it != queue_.end()) {
-          cancelled_queued.push_back(std::move(*it));
-          queue_.erase(it);
-        }
+        if (auto e = queue_.Remove(id)) cancelled_queued.push_back(std::move(*e));
       }
       if (stopping) {
-        for (Entry& e : queue_) cancelled_queued.push_back(std::move(e));
-        queue_.clear();
+        for (Entry& e : queue_.TakeAll()) cancelled_queued.push_back(std::move(e));
       }
-      for (int w = 1; w < world_size_ && !queue_.empty(); ++w) {
-        if (busy[w]) continue;
-        busy[w] = std::move(queue_.front());
-        queue_.pop_front();
-        cancel_sent[w] = false;
-        to_send.emplace_back(w, ToWorkerTask(busy[w]->task).SerializeAsString());
+      // Dispatch: the next task goes to the lowest free ranks when enough are free; a group that
+      // does not fit holds the free ranks until it does.
+      std::vector<int> free_ranks;
+      for (int w = 1; w < world_size_; ++w) {
+        if (!busy[w]) free_ranks.push_back(w);
+      }
+      while (const Entry* next = queue_.Peek()) {
+        const int wanted = std::clamp(next->task.needs.ranks, 1, world_size_ - 1);
+        if (static_cast<int>(free_ranks.size()) < wanted) break;
+        auto task = std::make_shared<Running>();
+        task->entry = queue_.Pop();
+        task->ranks.assign(free_ranks.begin(), free_ranks.begin() + wanted);
+        free_ranks.erase(free_ranks.begin(), free_ranks.begin() + wanted);
+        task->outstanding = wanted;
+        v1::WorkerTask wire = ToWorkerTask(task->entry.task);
+        if (wanted > 1) {
+          for (int r : task->ranks) wire.add_group_ranks(r);
+          wire.set_group_tag(next_group_tag);
+          next_group_tag = next_group_tag % 30000 + 1;  // within the guaranteed MPI_TAG_UB
+        }
+        const std::string bytes = wire.SerializeAsString();
+        for (int r : task->ranks) {
+          busy[r] = task;
+          to_send.emplace_back(r, bytes);
+        }
+        running[task->entry.task.task_id] = task;
       }
     }
     bool did_work = !to_send.empty() || !cancelled_queued.empty();
@@ -116,16 +143,31 @@ void MpiPool::CommLoop() {
       e.done(CancelledResult(e.task.task_id, stopping ? kShuttingDown : "cancelled"));
     }
     for (const auto& [rank, bytes] : to_send) Send(bytes, rank, kTagTask);
-    // Cancellation of running tasks, and of every running task while stopping.
-    for (int w = 1; w < world_size_; ++w) {
-      if (!busy[w] || cancel_sent[w]) continue;
-      const uint64_t id = busy[w]->task.task_id;
+    // Cancellation of running tasks (every member of a group), and of all of them while stopping.
+    for (auto& [id, task] : running) {
+      if (task->cancel_sent) continue;
       if (stopping || std::find(cancels.begin(), cancels.end(), id) != cancels.end()) {
-        Send(std::string(reinterpret_cast<const char*>(&id), sizeof id), w, kTagCancel);
-        cancel_sent[w] = true;
+        for (int r : task->ranks) {
+          Send(std::string(reinterpret_cast<const char*>(&id), sizeof id), r, kTagCancel);
+        }
+        task->cancel_sent = true;
       }
     }
-    // Results.
+    // Progress reports of running tasks.
+    for (;;) {
+      int flag = 0;
+      MPI_Status status;
+      MPI_Iprobe(MPI_ANY_SOURCE, kTagProgress, MPI_COMM_WORLD, &flag, &status);
+      if (!flag) break;
+      v1::WorkerProgress progress;
+      progress.ParseFromString(Receive(status.MPI_SOURCE, kTagProgress));
+      did_work = true;
+      auto it = running.find(progress.task_id());
+      if (it != running.end() && it->second->entry.task.progress) {
+        it->second->entry.task.progress(progress.fraction());
+      }
+    }
+    // Results: a task ends when every member has reported; the leader's result is its answer.
     for (;;) {
       int flag = 0;
       MPI_Status status;
@@ -135,13 +177,20 @@ void MpiPool::CommLoop() {
       v1::WorkerResult result;
       result.ParseFromString(Receive(status.MPI_SOURCE, kTagResult, &from));
       did_work = true;
-      if (!busy[from]) continue;
-      Entry entry = std::move(*busy[from]);
-      busy[from].reset();
-      entry.done(FromWorkerResult(result, entry.task.tier, "rank " + std::to_string(from)));
+      std::shared_ptr<Running> task = std::move(busy[from]);
+      if (!task) continue;
+      const std::string label = RanksLabel(task->ranks);
+      if (from == task->ranks.front()) {
+        task->leader_result = FromWorkerResult(result, task->entry.task.tier, label);
+      } else if (!result.ok() && task->leader_result.ok) {
+        // A member failed where the leader did not: the task failed.
+        task->leader_result = FromWorkerResult(result, task->entry.task.tier, label);
+      }
+      if (--task->outstanding > 0) continue;
+      running.erase(task->entry.task.task_id);
+      task->entry.done(std::move(task->leader_result));
     }
-    const bool any_busy = std::any_of(busy.begin(), busy.end(), [](const auto& b) { return b; });
-    if (stopping && !any_busy) break;
+    if (stopping && running.empty()) break;
     if (did_work) {
       backoff.Reset();
     } else {
@@ -159,8 +208,92 @@ void MpiPool::Shutdown() {
   if (comm_.joinable()) comm_.join();
 }
 
+namespace {
+
+// Drains CANCEL messages from rank 0; true when one names `task_id`.
+bool ReceiveCancels(uint64_t task_id) {
+  bool mine = false;
+  int pending = 0;
+  MPI_Iprobe(0, kTagCancel, MPI_COMM_WORLD, &pending, MPI_STATUS_IGNORE);
+  while (pending) {
+    const std::string id_bytes = Receive(0, kTagCancel);
+    uint64_t id = 0;
+    std::copy(id_bytes.begin(), id_bytes.end(), reinterpret_cast<char*>(&id));
+    mine = mine || id == task_id;
+    MPI_Iprobe(0, kTagCancel, MPI_COMM_WORLD, &pending, MPI_STATUS_IGNORE);
+  }
+  return mine;
+}
+
+// The communicator of a task's rank group; MPI_COMM_NULL for a one-rank task. Collective on the
+// group's members only.
+MPI_Comm GroupCommunicator(const v1::WorkerTask& wire) {
+  if (wire.group_ranks_size() < 2) return MPI_COMM_NULL;
+  MPI_Group world_group = MPI_GROUP_NULL, group = MPI_GROUP_NULL;
+  MPI_Comm_group(MPI_COMM_WORLD, &world_group);
+  MPI_Group_incl(world_group, wire.group_ranks_size(), wire.group_ranks().data(), &group);
+  MPI_Comm comm = MPI_COMM_NULL;
+  MPI_Comm_create_group(MPI_COMM_WORLD, group, wire.group_tag(), &comm);
+  MPI_Group_free(&group);
+  MPI_Group_free(&world_group);
+  return comm;
+}
+
+TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, int rank) {
+  const TaskSpec task = FromWorkerTask(wire);
+  const MPI_Comm comm = GroupCommunicator(wire);
+  const bool leader = wire.group_ranks_size() < 2 || wire.group_ranks(0) == rank;
+  ComputeContext context;
+  context.communicator = comm;
+  context.threads = task.needs.threads;
+  bool cancelled = false;
+  auto last_poll = std::chrono::steady_clock::now();
+  if (comm == MPI_COMM_NULL) {
+    // Polls for a CANCEL of this task at most once a millisecond.
+    context.cancelled = [&]() {
+      const auto now = std::chrono::steady_clock::now();
+      if (cancelled || now - last_poll < std::chrono::milliseconds(1)) return cancelled;
+      last_poll = now;
+      cancelled = ReceiveCancels(task.task_id) || cancelled;
+      return cancelled;
+    };
+  } else {
+    // Collective: every member polls its own CANCEL and the group agrees (logical or), so all
+    // members stop at the same call.
+    context.cancelled = [&]() {
+      int mine = (ReceiveCancels(task.task_id) || cancelled) ? 1 : 0;
+      int any = 0;
+      MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, comm);
+      cancelled = any != 0;
+      return cancelled;
+    };
+  }
+  if (leader) {
+    auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+    context.progress = [&](double fraction) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_report < std::chrono::milliseconds(500)) return;
+      last_report = now;
+      v1::WorkerProgress p;
+      p.set_task_id(task.task_id);
+      p.set_fraction(fraction);
+      Send(p.SerializeAsString(), 0, kTagProgress);
+    };
+  }
+  const std::string me = wire.group_ranks_size() < 2 ? "rank " + std::to_string(rank)
+                                                      : "rank group led by rank " +
+                                                            std::to_string(wire.group_ranks(0));
+  TaskResult result = RunTask(tiers, task, context, me);
+  if (comm != MPI_COMM_NULL) {
+    MPI_Comm comm_to_free = comm;
+    MPI_Comm_free(&comm_to_free);
+  }
+  return result;
+}
+
+}  // namespace
+
 void RunMpiWorker(const TierRegistry& tiers, int rank) {
-  const std::string me = "rank " + std::to_string(rank);
   Backoff backoff;
   for (;;) {
     int flag = 0;
@@ -182,29 +315,10 @@ void RunMpiWorker(const TierRegistry& tiers, int rank) {
     v1::WorkerTask wire;
     TaskResult result;
     if (!wire.ParseFromString(Receive(0, kTagTask))) {
+      result.error_kind = ErrorKind::kInternal;
       result.error = "malformed task message";
     } else {
-      const TaskSpec task = FromWorkerTask(wire);
-      // Cancellation check: polls for a CANCEL of this task at most once a millisecond.
-      bool cancelled = false;
-      auto last_poll = std::chrono::steady_clock::now();
-      auto check = [&]() {
-        if (cancelled) return true;
-        const auto now = std::chrono::steady_clock::now();
-        if (now - last_poll < std::chrono::milliseconds(1)) return false;
-        last_poll = now;
-        int pending = 0;
-        MPI_Iprobe(0, kTagCancel, MPI_COMM_WORLD, &pending, MPI_STATUS_IGNORE);
-        while (pending) {
-          const std::string id_bytes = Receive(0, kTagCancel);
-          uint64_t id = 0;
-          std::copy(id_bytes.begin(), id_bytes.end(), reinterpret_cast<char*>(&id));
-          cancelled = cancelled || id == task.task_id;
-          MPI_Iprobe(0, kTagCancel, MPI_COMM_WORLD, &pending, MPI_STATUS_IGNORE);
-        }
-        return cancelled;
-      };
-      result = RunTask(tiers, task, check, me);
+      result = RunWorkerTask(tiers, wire, rank);
     }
     Send(ToWorkerResult(result).SerializeAsString(), 0, kTagResult);
   }

@@ -10,11 +10,9 @@
 
 #include <unistd.h>
 
-#include "cache/curve_key.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
 #include "server/geo/plot.h"
-#include "server/pool_wait.h"
 #include "solvers/common/errors.h"
 #include "solvers/mobility/similarity.h"
 
@@ -24,11 +22,6 @@ namespace {
 
 constexpr int kMaxScales = 8;
 
-int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // Lengths times k, load times k^2: equal W/(b d) (seed 001 Table 6).
 TractionRequest ScaledRequest(const TractionRequest& full, double k) {
@@ -111,9 +104,7 @@ std::string PlotPng(const v1::ScalabilityRequest& request,
 }  // namespace
 
 v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
-                                          const TierRegistry& tiers, WorkerPool& pool,
-                                          cache::CurveStore& curves,
-                                          std::atomic<uint64_t>& next_task_id,
+                                          const TierRegistry& tiers, CurveResolver& resolver,
                                           std::chrono::steady_clock::time_point deadline,
                                           const std::function<bool()>& abandon) {
   Require(!request.tier().empty(), "tier", "is missing");
@@ -137,36 +128,30 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
   full.Validate();
   tier.ValidateSoil(full.soil, "soil");
 
-  // One task per scale: the exact cache key, else the pool.
+  // One task per scale: the exact cache key, else the pool (never similarity: see the header).
+  std::vector<CurveTask> tasks;
   std::vector<TractionRequest> requests;
-  std::vector<std::string> keys;
-  std::vector<std::optional<cache::StoredCurve>> found;
-  std::vector<TaskSpec> tasks;
-  std::vector<int> task_scale;
   for (int i = 0; i < n; ++i) {
-    TractionRequest q = cache::Quantise(ScaledRequest(full, request.scales(i)));
-    q.Validate();
-    keys.push_back(cache::CurveKey(tier.Name(), tier.Version(), q));
-    found.push_back(curves.Find(keys.back()));
-    if (!found.back()) {
-      tasks.push_back(TaskSpec{next_task_id++, tier.Name(), q, 0});
-      task_scale.push_back(i);
-    }
-    requests.push_back(std::move(q));
+    tasks.push_back(CurveResolver::Prepare(tier, ScaledRequest(full, request.scales(i))));
+    requests.push_back(tasks.back().request);
   }
-  const std::vector<TaskResult> results = RunAndWait(pool, tasks, deadline, abandon);
-  for (size_t t = 0; t < results.size(); ++t) {
-    const TaskResult& r = results[t];
-    const int i = task_scale[t];
-    if (!r.ok) {
-      if (r.cancelled) throw std::runtime_error("the scalability study was not finished in time");
-      throw InputError("scales", "scale " + std::to_string(request.scales(i)) + ": " + r.error);
+  ResolveOptions options;
+  options.allow_similarity = false;
+  options.deadline = deadline;
+  options.stop = abandon;
+  options.stop_on_failure = true;
+  const std::vector<Resolution> resolved = resolver.Resolve(tier, tasks, options);
+  std::vector<std::optional<cache::StoredCurve>> found;
+  for (int i = 0; i < n; ++i) {
+    const Resolution& r = resolved[i];
+    if (r.source == CurveSource::kCancelled) {
+      throw std::runtime_error("the scalability study was not finished in time");
     }
-    cache::StoredCurve stored{keys[i], requests[i], r.curve, r.computed_by, r.compute_seconds,
-                              NowMs()};
-    stored.curve.tier = tier.Name();
-    curves.Put(stored);
-    found[i] = std::move(stored);
+    if (!r.ok()) {
+      ThrowError(r.error_kind, "scales",
+                 "scale " + std::to_string(request.scales(i)) + ": " + r.error);
+    }
+    found.push_back(r.stored);
   }
 
   // The full-scale wheel must be carried (it defines the band); a scale model that sinks past its

@@ -11,16 +11,16 @@
 
 #include "cache/curve_store.h"
 #include "gonogo/v1/mobility.pb.h"
-#include "server/worker_pool.h"
+#include "server/curve_resolver.h"
 #include "solvers/common/tier.h"
 
 namespace gonogo::server {
 
-// Throws InputError naming the field for bad requests.
+// Throws InputError naming the field for bad requests, a scale's task failure with its kind
+// (NumericalError, ...), and std::runtime_error when the study was not finished by `deadline` or
+// `abandon` turned true.
 v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
-                                          const TierRegistry& tiers, WorkerPool& pool,
-                                          cache::CurveStore& curves,
-                                          std::atomic<uint64_t>& next_task_id,
+                                          const TierRegistry& tiers, CurveResolver& resolver,
                                           std::chrono::steady_clock::time_point deadline,
                                           const std::function<bool()>& abandon);
 

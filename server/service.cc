@@ -4,10 +4,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cache/curve_key.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
-#include "server/pool_wait.h"
+#include "server/curve_resolver.h"
+#include "server/status.h"
 #include "server/scalability.h"
 #include "solvers/common/errors.h"
 
@@ -29,32 +29,13 @@ const char* RoleFileName(v1::RasterRole role) {
   }
 }
 
-int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
-grpc::Status ToStatus(const std::exception_ptr& error) {
-  try {
-    std::rethrow_exception(error);
-  } catch (const InputError& e) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
-  } catch (const LimitError& e) {
-    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
-  } catch (const cache::DatabaseError& e) {
-    return grpc::Status(grpc::StatusCode::INTERNAL, std::string("database: ") + e.what());
-  } catch (const std::exception& e) {
-    return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
-  }
-}
-
 MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
-                                         const TierRegistry& tiers, WorkerPool& pool,
+                                         const TierRegistry& tiers, CurveResolver& resolver,
                                          ServiceLimits limits)
-    : jobs_(jobs), curves_(db), tiers_(tiers), pool_(pool), limits_(limits) {}
+    : jobs_(jobs), curves_(db), tiers_(tiers), resolver_(resolver), limits_(limits) {}
 
 grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
                                             grpc::ServerReader<v1::SubmitMapRequest>* reader,
@@ -224,38 +205,28 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     TractionRequest r;
     r.tyre = FromProto(request->tyre());
     r.wheel_load_n = request->wheel_load_n();
-    r.soil = SoilForTier(tier, FromProto(request->soil()));
+    r.soil = FromProto(request->soil());
     r.slips = TractionRequest::SlipSweep(request->slip_step() == 0 ? 0.05 : request->slip_step());
-    r.Validate();
-    tier.ValidateSoil(r.soil, "soil");
-    const TractionRequest q = cache::Quantise(r);
-    const std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
-    if (auto found = LookUpCurve(curves_, tier, q, key, !request->disable_similarity())) {
-      if (!found->curve.immobile_reason.empty()) {
-        return {grpc::StatusCode::INVALID_ARGUMENT, found->curve.immobile_reason};
-      }
-      FillAnswer(q, *found, response);
-      return grpc::Status::OK;
+    const CurveTask task = CurveResolver::Prepare(tier, std::move(r));
+    // The pool computes a miss; this handler waits on the answer, not on the solver.
+    ResolveOptions options;
+    options.allow_similarity = !request->disable_similarity();
+    options.deadline = std::chrono::steady_clock::now() +
+                       std::chrono::milliseconds(limits_.curve_timeout_ms);
+    options.stop = [context] { return context->IsCancelled(); };
+    const Resolution answer = resolver_.Resolve(tier, {task}, options).front();
+    if (answer.source == CurveSource::kCancelled) {
+      return {grpc::StatusCode::DEADLINE_EXCEEDED, "the traction curve was not ready in time"};
     }
-    // Not cached: the pool computes it; this handler waits on the answer, not on the solver.
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::milliseconds(limits_.curve_timeout_ms);
-    TaskResult result = std::move(RunAndWait(pool_, {TaskSpec{next_task_id_++, tier.Name(), q, 0}},
-                                             deadline, [context] { return context->IsCancelled(); })
-                                      .front());
-    if (!result.ok) {
-      return {result.cancelled ? grpc::StatusCode::DEADLINE_EXCEEDED
-                               : grpc::StatusCode::INVALID_ARGUMENT,
-              result.cancelled ? "the traction curve was not ready in time" : result.error};
+    if (!answer.ok()) return StatusFor(answer.error_kind, answer.error);
+    if (!answer.curve.immobile_reason.empty()) {
+      return StatusFor(ErrorKind::kCannotCarry, answer.curve.immobile_reason);
     }
-    result.curve.tier = tier.Name();
-    cache::StoredCurve stored{key, q, result.curve, result.computed_by, result.compute_seconds,
-                              NowMs()};
-    curves_.Put(stored);
-    if (!stored.curve.immobile_reason.empty()) {
-      return {grpc::StatusCode::INVALID_ARGUMENT, stored.curve.immobile_reason};
+    if (answer.cached) {
+      FillAnswer(task.request, *answer.cached, response);
+    } else {
+      FillCurve(answer.stored, false, response);
     }
-    FillCurve(stored, false, response);
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
@@ -298,12 +269,31 @@ grpc::Status MobilityServiceImpl::RunScalability(grpc::ServerContext* context,
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::milliseconds(limits_.curve_timeout_ms);
-    *response = RunScalabilityStudy(*request, tiers_, pool_, curves_, next_task_id_, deadline,
+    *response = RunScalabilityStudy(*request, tiers_, resolver_, deadline,
                                     [context] { return context->IsCancelled(); });
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
   }
+}
+
+grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext*, const v1::ListTiersRequest*,
+                                            v1::ListTiersResponse* response) {
+  for (const std::string& name : tiers_.Names()) {
+    const TractionTier& tier = tiers_.Get(name);
+    const TierDescription d = tier.Describe();
+    const TierNeeds needs = tier.Needs(TractionRequest{});
+    v1::TierInfo* info = response->add_tiers();
+    info->set_name(name);
+    info->set_version(tier.Version());
+    info->set_summary(d.summary);
+    info->set_reads(d.reads);
+    info->set_typical_cost(d.typical_cost);
+    info->set_ranks(static_cast<uint32_t>(needs.ranks));
+    info->set_threads(static_cast<uint32_t>(needs.threads));
+    info->set_expected_seconds(needs.expected_seconds);
+  }
+  return grpc::Status::OK;
 }
 
 }  // namespace gonogo::server

@@ -1,6 +1,6 @@
 // The gRPC MobilityService. Handlers validate, persist and read; solver work goes to the worker pool
 // through the JobManager, never onto a handler thread. Errors are mapped to gRPC codes in one place
-// (ToStatus).
+// (server/status.h).
 #pragma once
 
 #include <atomic>
@@ -9,6 +9,7 @@
 
 #include "cache/curve_store.h"
 #include "gonogo/v1/mobility.grpc.pb.h"
+#include "server/curve_resolver.h"
 #include "server/job_manager.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
@@ -21,13 +22,10 @@ struct ServiceLimits {
   int curve_timeout_ms = 30 * 60 * 1000;
 };
 
-// Maps exceptions thrown by validation and storage to gRPC statuses.
-grpc::Status ToStatus(const std::exception_ptr& error);
-
 class MobilityServiceImpl final : public v1::MobilityService::Service {
  public:
   MobilityServiceImpl(JobManager& jobs, cache::Database& db, const TierRegistry& tiers,
-                      WorkerPool& pool, ServiceLimits limits);
+                      CurveResolver& resolver, ServiceLimits limits);
 
   // While draining, new work is refused with UNAVAILABLE.
   void SetDraining() { draining_ = true; }
@@ -48,15 +46,16 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                                   v1::ListTractionCurvesResponse*) override;
   grpc::Status RunScalability(grpc::ServerContext*, const v1::ScalabilityRequest*,
                               v1::ScalabilityReport*) override;
+  grpc::Status ListTiers(grpc::ServerContext*, const v1::ListTiersRequest*,
+                         v1::ListTiersResponse*) override;
 
  private:
   JobManager& jobs_;
   cache::CurveStore curves_;
   const TierRegistry& tiers_;
-  WorkerPool& pool_;
+  CurveResolver& resolver_;
   ServiceLimits limits_;
   std::atomic<bool> draining_{false};
-  std::atomic<uint64_t> next_task_id_{1ULL << 62};  // distinct from the job manager's ids
 };
 
 }  // namespace gonogo::server

@@ -6,8 +6,8 @@
 
 namespace gonogo::server {
 
-TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task, const CancelCheck& cancelled,
-                   const std::string& computed_by) {
+TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task,
+                   const ComputeContext& context, const std::string& computed_by) {
   TaskResult result;
   result.task_id = task.task_id;
   result.computed_by = computed_by;
@@ -15,20 +15,20 @@ TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task, const Cancel
   try {
     // The fault-injection delay sleeps in short steps so that cancellation still reaches it.
     for (uint32_t waited = 0; waited < task.debug_delay_ms; waited += 5) {
-      if (cancelled && cancelled()) throw CancelledError();
+      if (context.Cancelled()) throw CancelledError();
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     const TractionTier& tier = tiers.Get(task.tier);
     task.request.Validate();
-    result.curve = tier.Compute(task.request, cancelled);
+    if (context.Cancelled()) throw CancelledError();  // cancelled while queued
+    result.curve = tier.Compute(task.request, context);
     result.ok = true;
-  } catch (const CancelledError&) {
-    result.cancelled = true;
-    result.error = "cancelled";
-  } catch (const std::exception& e) {
-    result.error = e.what();
   } catch (...) {
-    result.error = "unknown error";
+    const ClassifiedError e = ClassifyCurrentException();
+    result.cancelled = e.kind == ErrorKind::kCancelled;
+    result.error_kind = e.kind;
+    result.error_field = e.field;
+    result.error = e.message;
   }
   result.compute_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -6,8 +6,9 @@
 
 namespace gonogo::server {
 
-// Never throws: input errors, solver failures and cancellation all come back in the result.
-TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task, const CancelCheck& cancelled,
-                   const std::string& computed_by);
+// Never throws: input errors, solver failures and cancellation all come back in the result, typed
+// (TaskResult::error_kind). Collective on context.communicator when it is set.
+TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task,
+                   const ComputeContext& context, const std::string& computed_by);
 
 }  // namespace gonogo::server

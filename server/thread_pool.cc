@@ -20,7 +20,7 @@ void ThreadPool::Submit(TaskSpec task, TaskCallback done) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!stopping_) {
-      queue_.push_back(Entry{std::move(task), std::move(done)});
+      queue_.Push(Entry{std::move(task), std::move(done)});
       wake_.notify_one();
       return;
     }
@@ -37,11 +37,9 @@ void ThreadPool::Cancel(uint64_t task_id) {
       running->second->store(true);
       return;
     }
-    auto it = std::find_if(queue_.begin(), queue_.end(),
-                           [&](const Entry& e) { return e.task.task_id == task_id; });
-    if (it == queue_.end()) return;
-    done = std::move(it->done);
-    queue_.erase(it);
+    std::optional<Entry> queued = queue_.Remove(task_id);
+    if (!queued) return;
+    done = std::move(queued->done);
   }
   done(CancelledResult(task_id, "cancelled"));
 }
@@ -51,14 +49,18 @@ void ThreadPool::Loop() {
     Entry entry;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-      if (queue_.empty()) return;
-      entry = std::move(queue_.front());
-      queue_.pop_front();
+      wake_.wait(lock, [this] { return stopping_ || !queue_.Empty(); });
+      if (queue_.Empty()) return;
+      entry = queue_.Pop();
       running_[entry.task.task_id] = entry.cancel;
     }
     auto flag = entry.cancel;
-    TaskResult r = RunTask(tiers_, entry.task, [flag] { return flag->load(); }, "thread");
+    // A task that asks for several ranks runs alone here (no communicator): every tier must.
+    ComputeContext context;
+    context.cancelled = [flag] { return flag->load(); };
+    context.progress = entry.task.progress;
+    context.threads = std::max(1, entry.task.needs.threads);
+    TaskResult r = RunTask(tiers_, entry.task, context, "thread");
     {
       std::lock_guard<std::mutex> lock(mutex_);
       running_.erase(entry.task.task_id);
@@ -68,12 +70,12 @@ void ThreadPool::Loop() {
 }
 
 void ThreadPool::Shutdown() {
-  std::deque<Entry> dropped;
+  std::vector<Entry> dropped;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopping_ && threads_.empty()) return;
     stopping_ = true;
-    dropped.swap(queue_);
+    dropped = queue_.TakeAll();
     for (auto& [id, flag] : running_) flag->store(true);
     wake_.notify_all();
   }

@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "server/task_queue.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
 
@@ -37,7 +38,7 @@ class ThreadPool : public WorkerPool {
   const TierRegistry& tiers_;
   std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<Entry> queue_;
+  TwoLaneQueue<Entry> queue_;
   std::map<uint64_t, std::shared_ptr<std::atomic<bool>>> running_;
   bool stopping_ = false;
   std::vector<std::thread> threads_;

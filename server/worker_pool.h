@@ -7,24 +7,39 @@
 #include <functional>
 #include <string>
 
+#include "solvers/common/errors.h"
+#include "solvers/common/tier.h"
 #include "solvers/common/traction.h"
 
 namespace gonogo::server {
+
+// A running task's progress: the fraction of its curve done, in [0, 1].
+using TaskProgress = std::function<void(double fraction)>;
+
+// Tasks expected to take at least this long go to the long lane of a pool's queue, so that cheap
+// and long tasks never wait in one FIFO behind each other.
+inline constexpr double kLongTaskSeconds = 1.0;
 
 struct TaskSpec {
   uint64_t task_id = 0;
   std::string tier;
   TractionRequest request;   // already quantised
   uint32_t debug_delay_ms = 0;  // fault-injection delay before computing (tests, demos)
+  // From the tier (TractionTier::Needs). ranks > 1: a collective task on a rank group; a pool
+  // with fewer workers gives it all of them, the thread pool runs it alone.
+  TierNeeds needs;
+  TaskProgress progress;  // may be empty; called on a pool thread; never crosses MPI
 };
 
 struct TaskResult {
   uint64_t task_id = 0;
   bool ok = false;
   bool cancelled = false;
+  ErrorKind error_kind = ErrorKind::kNone;  // why the task failed, typed across ranks
+  std::string error_field;    // the field named, for bad input
   std::string error;          // why the task failed
   TractionCurve curve;
-  std::string computed_by;    // "rank N" or "thread"
+  std::string computed_by;    // "rank N", "ranks N,M" for a rank group, or "thread"
   double compute_seconds = 0;
 };
 
@@ -35,6 +50,7 @@ inline TaskResult CancelledResult(uint64_t task_id, std::string why) {
   TaskResult r;
   r.task_id = task_id;
   r.cancelled = true;
+  r.error_kind = ErrorKind::kCancelled;
   r.error = std::move(why);
   return r;
 }

@@ -1,5 +1,7 @@
 // Typed errors shared by every layer. Setup and input mistakes throw InputError naming the offending
-// field; the server maps it to INVALID_ARGUMENT in one place. Numerical outcomes are returned as values.
+// field; a solver that cannot answer valid input throws NumericalError. Every error keeps its kind
+// (ErrorKind) across threads, ranks and RPCs and becomes a gRPC status in one place
+// (server/status.h): INVALID_ARGUMENT only for bad input.
 #pragma once
 
 #include <stdexcept>
@@ -35,6 +37,48 @@ class LimitError : public std::runtime_error {
  private:
   std::string field_;
 };
+
+// A solver could not answer a valid request: an element turned inside out, an iteration did not
+// converge, a state went non-finite. Retrying the same request gives the same failure; other
+// solver settings (a finer mesh, a smaller step) may not. Maps to FAILED_PRECONDITION.
+class NumericalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Thrown by a solver that noticed a cancellation part-way through.
+class CancelledError : public std::runtime_error {
+ public:
+  CancelledError() : std::runtime_error("cancelled") {}
+};
+
+// What went wrong, as it crosses threads, MPI ranks and RPCs. The values are part of the worker
+// wire format (proto/gonogo/v1/worker.proto): append, never renumber.
+enum class ErrorKind : int {
+  kNone = 0,         // no error
+  kBadInput = 1,     // InputError: the caller's mistake, names the field
+  kCannotCarry = 2,  // CannotCarryError: the soil cannot carry the wheel
+  kLimit = 3,        // LimitError: a configured limit
+  kNumerical = 4,    // NumericalError: the solver could not answer valid input
+  kCancelled = 5,    // CancelledError: the caller no longer wants the answer
+  kInternal = 6,     // anything else: a defect or an environment failure
+};
+
+// "bad input", "soil cannot carry", ... for messages and logs.
+const char* ErrorKindName(ErrorKind kind);
+
+// The kind and message of the exception being handled; call only inside a catch block.
+struct ClassifiedError {
+  ErrorKind kind = ErrorKind::kInternal;
+  std::string message;
+  std::string field;  // for kBadInput, kCannotCarry and kLimit: the field named
+};
+ClassifiedError ClassifyCurrentException();
+
+// Throws the exception class of `kind` (InputError for kBadInput, ...) with `message`: how an error
+// that crossed a rank boundary as a value is raised again with its kind. `field` names the field for
+// the kinds that carry one; for the others it is ignored.
+[[noreturn]] void ThrowError(ErrorKind kind, const std::string& field, const std::string& message);
 
 // Always-on check for input: throws InputError(field, reason) when `ok` is false.
 inline void Require(bool ok, const std::string& field, const std::string& reason) {

@@ -1,6 +1,9 @@
-// The traction-tier interface and its registry. A tier is added by writing one class and one line in
-// RegisterBuiltinTiers(); nothing else is edited (CONVENTIONS: no static self-registration).
+// The traction-tier interface and its registry. A tier is added by writing one adapter class under
+// solvers/tiers/ and one line in RegisterBuiltinTiers(); nothing else is edited (CONVENTIONS: no
+// static self-registration). solvers/tiers/README.md walks through it.
 #pragma once
+
+#include <mpi.h>
 
 #include <functional>
 #include <map>
@@ -9,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "solvers/common/errors.h"
 #include "solvers/common/traction.h"
 
 namespace gonogo {
@@ -16,10 +20,41 @@ namespace gonogo {
 // Returns true once the caller no longer wants the answer (job cancelled, server draining).
 using CancelCheck = std::function<bool()>;
 
-// Thrown by a tier that noticed a cancellation part-way through.
-class CancelledError : public std::runtime_error {
- public:
-  CancelledError() : std::runtime_error("cancelled") {}
+// Fraction of the curve done, in [0, 1]; called now and then, never required.
+using ProgressReport = std::function<void(double fraction)>;
+
+// What one Compute call is given besides the request.
+struct ComputeContext {
+  // May be empty. In a collective task (communicator set) the call is collective on the
+  // communicator: every rank of the group must call it at the same points, and all get the same
+  // answer.
+  CancelCheck cancelled;
+  ProgressReport progress;  // may be empty; in a collective task only the group's rank 0 reports
+  int threads = 1;          // threads the tier may use inside this call (OpenMP or std::thread)
+  // The task's rank group, for a tier whose Needs().ranks > 1: Compute is then collective on it and
+  // its group rank 0 returns the curve (the other ranks' return values are discarded).
+  // MPI_COMM_NULL when the task runs on one rank or in a process without MPI: the tier computes
+  // alone.
+  MPI_Comm communicator = MPI_COMM_NULL;
+
+  bool Cancelled() const { return cancelled && cancelled(); }
+  void Report(double fraction) const {
+    if (progress) progress(fraction);
+  }
+};
+
+// What a tier asks of the pool for one request (ARCHITECTURE section 5).
+struct TierNeeds {
+  int ranks = 1;                // MPI ranks of one task; > 1 makes the task collective
+  int threads = 1;              // threads per rank it can use
+  double expected_seconds = 0;  // typical cost of this request, for scheduling (cheap vs long)
+};
+
+// Human-facing description for `gonogo tiers`.
+struct TierDescription {
+  std::string summary;       // one line: the model
+  std::string reads;         // which parts of the soil state and tyre it reads
+  std::string typical_cost;  // e.g. "microseconds", "minutes on one core"
 };
 
 class TractionTier {
@@ -28,6 +63,9 @@ class TractionTier {
   virtual std::string Name() const = 0;
   // Bumped whenever the numbers a tier returns could change; part of every cache key.
   virtual std::string Version() const = 0;
+  virtual TierDescription Describe() const = 0;
+  // Resources of one request; the default is one rank, one thread, negligible time.
+  virtual TierNeeds Needs(const TractionRequest& /*request*/) const { return {}; }
   // Which parts of a SoilState the tier reads. What it does not read is stripped before planning
   // and keying (SoilForTier), so that it neither splits terrain units nor cache keys.
   virtual bool UsesConeIndex() const { return true; }
@@ -36,14 +74,27 @@ class TractionTier {
   // Checks, before any work is queued, that the tier can resolve this soil (library name, explicit
   // parameters); throws InputError naming `field`. Cheap: no solver work.
   virtual void ValidateSoil(const SoilState& /*soil*/, const std::string& /*field*/) const {}
-  // Computes one curve. Throws InputError for requests the tier cannot take; thread-safe.
-  virtual TractionCurve Compute(const TractionRequest& request) const = 0;
-  // As Compute(), polling `cancelled` where the tier can stop early. Tiers whose curves take
-  // microseconds keep this default, which checks once before starting.
-  virtual TractionCurve Compute(const TractionRequest& request, const CancelCheck& cancelled) const {
-    if (cancelled && cancelled()) throw CancelledError();
-    return Compute(request);
+
+  // Computes one curve: throws CancelledError when the tier notices `context` cancelled during the
+  // work, InputError for requests the tier cannot take, NumericalError when the solver fails on a
+  // valid request; returns an immobile curve when the soil cannot carry the wheel. Thread-safe.
+  TractionCurve Compute(const TractionRequest& request, const ComputeContext& context) const {
+    return ComputeCurve(request, context);
   }
+  TractionCurve Compute(const TractionRequest& request) const {
+    return Compute(request, ComputeContext{});
+  }
+  TractionCurve Compute(const TractionRequest& request, const CancelCheck& cancelled) const {
+    ComputeContext context;
+    context.cancelled = cancelled;
+    return Compute(request, context);
+  }
+
+ protected:
+  // The tier's work. Tiers whose curves take microseconds may ignore `context`; long ones poll
+  // context.Cancelled() and call context.Report().
+  virtual TractionCurve ComputeCurve(const TractionRequest& request,
+                                     const ComputeContext& context) const = 0;
 };
 
 // The soil with only the parts `tier` reads.

@@ -23,12 +23,22 @@ void FeClassicTier::ValidateSoil(const SoilState& soil, const std::string& field
   ResolveSoil(soil, field);
 }
 
-TractionCurve FeClassicTier::Compute(const TractionRequest& request) const {
-  return Compute(request, nullptr);
+TierDescription FeClassicTier::Describe() const {
+  return {"explicit FE soil bin (hex8, total Lagrangian) with a Drucker-Prager closure; rigid "
+          "wheel through seed 001's drawbar-pull procedure",
+          "soil name (fe-classic soil library); tyre diameter and width; wheel load",
+          "minutes on one core"};
 }
 
-TractionCurve FeClassicTier::Compute(const TractionRequest& request,
-                                     const CancelCheck& cancelled) const {
+TierNeeds FeClassicTier::Needs(const TractionRequest& /*request*/) const {
+  TierNeeds needs;
+  needs.threads = options_.threads;
+  needs.expected_seconds = 300;
+  return needs;
+}
+
+TractionCurve FeClassicTier::ComputeCurve(const TractionRequest& request,
+                                          const ComputeContext& context) const {
   request.Validate();
   const FeSoil& soil = ResolveSoil(request.soil, "soil");
   RigWheel wheel;
@@ -38,7 +48,8 @@ TractionCurve FeClassicTier::Compute(const TractionRequest& request,
   RigOptions options;
   options.elements_per_radius = options_.elements_per_radius;
   options.threads = options_.threads;
-  options.cancelled = cancelled;
+  options.cancelled = context.cancelled;
+  options.progress = context.progress;
   TractionCurve curve;
   curve.tier = Name();
   curve.tier_version = Version();

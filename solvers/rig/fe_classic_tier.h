@@ -38,13 +38,18 @@ class FeClassicTier : public TractionTier {
   std::string Version() const override { return "fe-classic-2"; }
   bool UsesConeIndex() const override { return false; }
   bool UsesSoilName() const override { return true; }
+  TierDescription Describe() const override;
+  // Minutes on one core at the default resolution (README "Figures").
+  TierNeeds Needs(const TractionRequest& request) const override;
   void ValidateSoil(const SoilState& soil, const std::string& field) const override;
-  TractionCurve Compute(const TractionRequest& request) const override;
-  // Polls `cancelled` every 200 time steps and throws CancelledError once it returns true.
-  TractionCurve Compute(const TractionRequest& request,
-                        const CancelCheck& cancelled) const override;
 
   const FeSoil& ResolveSoil(const SoilState& soil, const std::string& field) const;
+
+ protected:
+  // Polls context.Cancelled() every 200 time steps and throws CancelledError once it is true;
+  // reports the fraction of simulated time done.
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override;
 
  private:
   FeSoilLibrary library_;

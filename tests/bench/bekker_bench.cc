@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "solvers/terramech/bekker_tier.h"
+#include "solvers/tiers/bekker_tier.h"
 
 using gonogo::TractionCurve;
 using gonogo::TractionRequest;
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::strcmp(argv[i], "--seconds") == 0) seconds = std::atof(argv[i + 1]);
   }
-  const gonogo::terramech::BekkerTier tier;
+  const gonogo::tiers::BekkerTier tier;
   const std::vector<Row> rows = {
       {"lll_dry_sand rigid", FedAlpha("lll_dry_sand", 0)},
       {"lete_sand rigid", FedAlpha("lete_sand", 0)},

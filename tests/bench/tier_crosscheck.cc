@@ -35,9 +35,9 @@
 #include "solvers/common/traction.h"
 #include "solvers/terramech/bekker.h"
 #include "solvers/terramech/bekker_soils.h"
-#include "solvers/terramech/bekker_tier.h"
+#include "solvers/tiers/bekker_tier.h"
 #include "solvers/terramech/brixius.h"
-#include "solvers/terramech/empirical_tier.h"
+#include "solvers/tiers/empirical_tier.h"
 
 using gonogo::TractionCurve;
 using gonogo::TractionRequest;
@@ -90,7 +90,7 @@ std::optional<std::vector<double>> RatiosAtReportSlips(const TractionCurve& curv
   return ratios;
 }
 
-double EmpiricalRatio(const gonogo::terramech::EmpiricalTier& tier, const TyreGeometry& tyre,
+double EmpiricalRatio(const gonogo::tiers::EmpiricalTier& tier, const TyreGeometry& tyre,
                       double cone_index_pa, double slip) {
   const TractionCurve curve = tier.Compute(Request(tyre, "", cone_index_pa, {slip}));
   return curve.points.front().drawbar_pull_n / kWheelLoadN;
@@ -98,7 +98,7 @@ double EmpiricalRatio(const gonogo::terramech::EmpiricalTier& tier, const TyreGe
 
 // The cone index in [kMinConeIndexPa, kMaxConeIndexPa] at which the empirical D/W at kMatchSlip
 // equals `target`, by bisection on log(CI); nullopt outside the empirical range.
-std::optional<double> EquivalentConeIndex(const gonogo::terramech::EmpiricalTier& tier,
+std::optional<double> EquivalentConeIndex(const gonogo::tiers::EmpiricalTier& tier,
                                           const TyreGeometry& tyre, double target) {
   double lo = kMinConeIndexPa;
   double hi = kMaxConeIndexPa;
@@ -125,8 +125,8 @@ std::string ModeName(const gonogo::BekkerParameters& soil, const TyreGeometry& t
 }
 
 void PrintPublishedComparison(const std::vector<PublishedConeIndex>& published,
-                              const gonogo::terramech::BekkerTier& bekker,
-                              const gonogo::terramech::EmpiricalTier& empirical,
+                              const gonogo::tiers::BekkerTier& bekker,
+                              const gonogo::tiers::EmpiricalTier& empirical,
                               const TyreGeometry& tyre) {
   if (published.empty()) {
     std::printf("  no library soil has a published cone index; nothing to compare\n");
@@ -161,8 +161,8 @@ void PrintPublishedComparison(const std::vector<PublishedConeIndex>& published,
 }
 
 void PrintEquivalentConeIndices(const gonogo::terramech::BekkerSoilLibrary& library,
-                                const gonogo::terramech::BekkerTier& bekker,
-                                const gonogo::terramech::EmpiricalTier& empirical,
+                                const gonogo::tiers::BekkerTier& bekker,
+                                const gonogo::tiers::EmpiricalTier& empirical,
                                 const TyreGeometry& tyre) {
   std::printf("  %-29s %-7s %27s %9s %6s %13s\n", "", "", "bekker D/W at slip", "CI_eq", "Bn_eq",
               "empirical D/W");
@@ -204,8 +204,8 @@ int main(int argc, char** argv) {
     ++i;
   }
   const auto& library = gonogo::terramech::BekkerSoilLibrary::Builtin();
-  const gonogo::terramech::BekkerTier bekker;
-  const gonogo::terramech::EmpiricalTier empirical;
+  const gonogo::tiers::BekkerTier bekker;
+  const gonogo::tiers::EmpiricalTier empirical;
 
   std::printf("FED Alpha front wheel: d 1.011 m, b 0.335 m, h 0.2178 m, delta 0.0327 m, W %.0f N\n",
               kWheelLoadN);

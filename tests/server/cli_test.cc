@@ -105,6 +105,17 @@ TEST_F(CliTest, ScalabilityWritesThePlotAndTables) {
   EXPECT_EQ(std::count(summary.begin(), summary.end(), '\n'), 4) << summary;
 }
 
+TEST_F(CliTest, TiersListsEveryTierWithWhatItReadsAndCosts) {
+  const CliRun r = Gonogo(server_->endpoint(), "tiers");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  for (const char* tier : {"empirical (empirical-1)", "bekker (bekker-1)", "fe-classic (fe-classic-2)"}) {
+    EXPECT_NE(r.out.find(tier), std::string::npos) << tier << "\n" << r.out;
+  }
+  EXPECT_NE(r.out.find("reads:  cone index"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cost:   minutes on one core"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("diagnostic"), std::string::npos) << "only with --diagnostic-tiers";
+}
+
 TEST_F(CliTest, BadVehicleFileAndOptionsAreExplained) {
   const fs::path bad = scratch_->path() / "bad_vehicle.json";
   std::ofstream(bad) << R"({"name": "x", "mass_kg": 1000, "wingspan_m": 3})";

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
-#include "solvers/terramech/empirical_tier.h"
+#include "solvers/tiers/empirical_tier.h"
 
 namespace gonogo::server {
 namespace {
@@ -33,7 +33,7 @@ geo::TerrainLayers Terrain() {
 }
 
 TEST(PlanMap, CellsWithTheSameSoilAndBinShareAUnit) {
-  terramech::EmpiricalTier tier;
+  tiers::EmpiricalTier tier;
   const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0, std::nullopt}}, {2, {"clay", 0.5, std::nullopt}}};
   const MapPlan plan = PlanMap(Terrain(), Vehicle(), soils, tier, TractionRequest::SlipSweep(0.05));
   EXPECT_EQ(plan.cell_unit[0], plan.cell_unit[1]);
@@ -49,7 +49,7 @@ TEST(PlanMap, CellsWithTheSameSoilAndBinShareAUnit) {
 }
 
 TEST(PlanMap, UnknownSoilClassNamesTheCell) {
-  terramech::EmpiricalTier tier;
+  tiers::EmpiricalTier tier;
   try {
     PlanMap(Terrain(), Vehicle(), {{1, {"sand", 1.0, std::nullopt}}}, tier, {0, 0.5, 1});
     FAIL();
@@ -60,7 +60,7 @@ TEST(PlanMap, UnknownSoilClassNamesTheCell) {
 }
 
 TEST(EvaluateMap, SteepAndNoDataCellsAreClassified) {
-  terramech::EmpiricalTier tier;
+  tiers::EmpiricalTier tier;
   const auto terrain = Terrain();
   const std::map<int32_t, SoilClassInfo> soils = {{1, {"sand", 1.0, std::nullopt}}, {2, {"clay", 1.0, std::nullopt}}};
   const MapPlan plan = PlanMap(terrain, Vehicle(), soils, tier, TractionRequest::SlipSweep(0.05));

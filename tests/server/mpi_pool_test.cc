@@ -6,6 +6,7 @@
 #include <dirent.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -113,6 +114,76 @@ TEST(MpiPool, TwoWorkerRanksComputeAMapAndShutDownCleanly) {
   const auto after = RankCpuSeconds(dir.path() / "data");
   for (const auto& [pid, cpu] : after) {
     EXPECT_LT(cpu - before.at(pid), 0.2) << "rank process " << pid << " used CPU while idle";
+  }
+  EXPECT_EQ(server.Terminate(), 0);
+}
+
+// Issue "open seams", pool: a task that needs 2 ranks runs collectively on a sub-communicator of
+// two workers while one-rank tasks complete on the third; errors reach the client typed.
+TEST(MpiPool, ARankGroupRunsOnItsSubCommunicatorWhileOneRankTasksFlow) {
+  ScratchDir dir("mpi-group");
+  ServerProcess server(dir.path() / "data", {"--diagnostic-tiers"}, 4);
+  ASSERT_NE(server.banner().find("MPI pool of 3 worker ranks"), std::string::npos)
+      << server.banner();
+  auto stub = server.Stub();
+  auto curve_request = [](const std::string& tier, double load_n) {
+    v1::GetTractionCurveRequest r;
+    r.set_tier(tier);
+    *r.mutable_tyre() = FedAlpha().axles(0).tyre();
+    r.set_wheel_load_n(load_n);
+    r.mutable_soil()->set_cone_index_pa(1.5e6);
+    r.set_disable_similarity(true);  // every query is computed
+    return r;
+  };
+
+  grpc::Status group_status;
+  v1::TractionCurve group_curve;
+  std::atomic<bool> group_done{false};
+  std::thread group([&] {
+    grpc::ClientContext c;
+    group_status = stub->GetTractionCurve(&c, curve_request("diagnostic-rank-group", 9000),
+                                          &group_curve);
+    group_done = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));  // the group is at work
+  for (int i = 0; i < 4; ++i) {
+    grpc::ClientContext c;
+    v1::TractionCurve curve;
+    const grpc::Status s = stub->GetTractionCurve(&c, curve_request("empirical", 9500 + 500 * i), &curve);
+    ASSERT_TRUE(s.ok()) << s.error_message();
+    EXPECT_EQ(curve.provenance().computed_by(), "rank 3") << "ranks 1 and 2 hold the group";
+    EXPECT_FALSE(curve.provenance().cache_hit());
+  }
+  EXPECT_FALSE(group_done) << "the one-rank tasks did not wait behind the group";
+  group.join();
+  ASSERT_TRUE(group_status.ok()) << group_status.error_message();
+  EXPECT_EQ(group_curve.provenance().computed_by(), "ranks 1,2");
+  EXPECT_EQ(group_curve.provenance().tier(), "diagnostic-rank-group");
+  ASSERT_EQ(group_curve.points_size(), 21);
+  EXPECT_GT(group_curve.points(10).drawbar_pull_n(), 0);
+
+  // A numerical failure is not the client's fault: FAILED_PRECONDITION with the solver's reason.
+  {
+    grpc::ClientContext c;
+    v1::TractionCurve curve;
+    const grpc::Status s =
+        stub->GetTractionCurve(&c, curve_request("diagnostic-numerical-failure", 9000), &curve);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << s.error_message();
+    EXPECT_NE(s.error_message().find("did not converge"), std::string::npos) << s.error_message();
+  }
+  // Bad input stays INVALID_ARGUMENT, and the pool keeps serving after both.
+  {
+    grpc::ClientContext c;
+    v1::TractionCurve curve;
+    EXPECT_EQ(stub->GetTractionCurve(&c, curve_request("empirical", -1), &curve).error_code(),
+              grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  {
+    grpc::ClientContext c;
+    v1::TractionCurve curve;
+    EXPECT_TRUE(stub->GetTractionCurve(&c, curve_request("diagnostic-rank-group", 9300), &curve)
+                    .ok());
+    EXPECT_EQ(curve.provenance().computed_by(), "ranks 1,2");
   }
   EXPECT_EQ(server.Terminate(), 0);
 }

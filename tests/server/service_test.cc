@@ -365,6 +365,40 @@ TEST_F(ServiceTest, CancelStopsARunningJob) {
   EXPECT_EQ(slow.Terminate(), 0) << "SIGTERM drains and exits cleanly";
 }
 
+// Two map jobs progress at once (--max-jobs 2, the default), sharing the pool.
+TEST_F(ServiceTest, TwoMapJobsProgressAtOnce) {
+  ScratchDir dir("two-jobs");
+  ServerProcess slow(dir.path(), {"--task-delay-ms", "100", "--threads", "2"});
+  auto stub = slow.Stub();
+  v1::Job first, second;
+  ASSERT_TRUE(Submit(*stub, SampleRequest(), SampleRasters(), &first).ok());
+  v1::MapRequest other = SampleRequest();
+  other.mutable_criteria()->set_design_slip(0.25);  // same tasks; a separate job all the same
+  other.set_disable_similarity(true);
+  ASSERT_TRUE(Submit(*stub, other, SampleRasters(), &second).ok());
+  bool both_progressed = false;
+  for (int i = 0; i < 400 && !both_progressed; ++i) {
+    int progressing = 0;
+    for (const std::string& id : {first.job_id(), second.job_id()}) {
+      grpc::ClientContext ctx;
+      v1::GetJobRequest req;
+      req.set_job_id(id);
+      v1::Job now;
+      ASSERT_TRUE(stub->GetJob(&ctx, req, &now).ok());
+      if (now.status().state() == v1::JOB_STATE_RUNNING && now.status().tasks_done() > 0 &&
+          now.status().tasks_done() < now.status().tasks_total()) {
+        ++progressing;
+      }
+    }
+    both_progressed = progressing == 2;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  EXPECT_TRUE(both_progressed) << "both jobs were part-way through at the same moment";
+  EXPECT_EQ(WaitForEnd(*stub, first.job_id()).state(), v1::JOB_STATE_DONE);
+  EXPECT_EQ(WaitForEnd(*stub, second.job_id()).state(), v1::JOB_STATE_DONE);
+  EXPECT_EQ(slow.Terminate(), 0);
+}
+
 TEST_F(ServiceTest, TractionCurveIsComputedOnceThenServedFromTheCache) {
   auto stub = server_->Stub();
   v1::GetTractionCurveRequest req;

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
-#include "solvers/terramech/bekker_tier.h"
-#include "solvers/terramech/empirical_tier.h"
+#include "solvers/tiers/bekker_tier.h"
+#include "solvers/tiers/empirical_tier.h"
 
 namespace gonogo::mobility {
 namespace {
@@ -48,7 +48,7 @@ TEST(PiTerms, SeedScaledTyresShareTheirPiTerms) {
 }
 
 TEST(Dimensionless, RoundTripIsExact) {
-  terramech::EmpiricalTier tier;
+  tiers::EmpiricalTier tier;
   const TractionRequest r = FullScale();
   const TractionCurve c = tier.Compute(r);
   const TractionCurve back = FromDimensionless(r, ToDimensionless(r, c));
@@ -64,7 +64,7 @@ TEST(Dimensionless, RoundTripIsExact) {
 // The empirical tier depends on the pi-terms only, so a similarity answer must equal the curve
 // computed directly for the scaled tyre: the closed-form check of the scaling law.
 TEST(Dimensionless, ScaledEmpiricalCurveEqualsTheDirectComputation) {
-  terramech::EmpiricalTier tier;
+  tiers::EmpiricalTier tier;
   const TractionRequest full = FullScale();
   const auto dimensionless = ToDimensionless(full, tier.Compute(full));
   for (double k : {0.7, 0.5, 0.25}) {
@@ -89,7 +89,7 @@ TEST(Dimensionless, ScaledEmpiricalCurveEqualsTheDirectComputation) {
 // and the direction follows from the model: the smaller tyre then carries relatively more load
 // (k^2 > k^(n+2) for k < 1), so it sinks deeper relative to its size.
 TEST(BekkerSimilarity, FrictionalSoilIsSelfSimilarUnderItsOwnLawNotUnderEqualPressure) {
-  terramech::BekkerTier tier;
+  tiers::BekkerTier tier;
   const double n = 0.8;
   const BekkerParameters full_soil{n, 0.0, 1.5e6, 0.0, 32.0, 0.02};
   auto request = [&](double k, double load_exponent) {

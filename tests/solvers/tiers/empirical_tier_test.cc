@@ -1,6 +1,6 @@
 // The empirical tier: every TractionPoint field from the Brixius ratios, the zero-cone-index limit,
 // similarity through the tier, input errors and registration.
-#include "solvers/terramech/empirical_tier.h"
+#include "solvers/tiers/empirical_tier.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,9 @@
 #include "solvers/common/tier.h"
 #include "solvers/terramech/brixius.h"
 
-namespace gonogo::terramech {
+namespace gonogo::tiers {
 namespace {
+using namespace gonogo::terramech;  // the kernels the adapters call
 
 // FED Alpha 335/65R22.5 of seed 001 Table 4: d 1.011 m, b 0.335 m, h = 0.65 b, delta = 0.15 h,
 // r = 0.505 m, wheel load 13438 N.
@@ -148,4 +149,4 @@ TEST(EmpiricalTier, RegistersUnderItsName) {
 }
 
 }  // namespace
-}  // namespace gonogo::terramech
+}  // namespace gonogo::tiers

@@ -10,7 +10,7 @@
 #include "solvers/terramech/bekker.h"
 #include "solvers/terramech/bekker_soils.h"
 
-namespace gonogo::terramech {
+namespace gonogo::tiers {
 
 // Soil: request.soil.bekker when set, else the library entry named request.soil.soil_name
 // (case-insensitive); the cone index is not read.
@@ -35,24 +35,27 @@ class BekkerTier : public TractionTier {
  public:
   // The built-in soil library and the published Wong-Reece constants.
   BekkerTier();
-  explicit BekkerTier(BekkerSoilLibrary library, WongReeceOptions options = {});
+  explicit BekkerTier(terramech::BekkerSoilLibrary library,
+                      terramech::WongReeceOptions options = {});
 
   std::string Name() const override { return "bekker"; }
   std::string Version() const override { return "bekker-1"; }
   bool UsesConeIndex() const override { return false; }
   bool UsesSoilName() const override { return true; }
+  TierDescription Describe() const override;
   void ValidateSoil(const SoilState& soil, const std::string& field) const override;
-  TractionCurve Compute(const TractionRequest& request) const override;
-  // Polls `cancelled` before every slip point and throws CancelledError once it returns true.
-  TractionCurve Compute(const TractionRequest& request,
-                        const CancelCheck& cancelled) const override;
 
   // The parameters the tier uses for `soil`; throws InputError(field, ...) as described above.
   BekkerParameters ResolveSoil(const SoilState& soil, const std::string& field) const;
 
+ protected:
+  // Polls context.Cancelled() before every slip point and throws CancelledError once it is true.
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override;
+
  private:
-  BekkerSoilLibrary library_;
-  WongReeceOptions options_;
+  terramech::BekkerSoilLibrary library_;
+  terramech::WongReeceOptions options_;
 };
 
-}  // namespace gonogo::terramech
+}  // namespace gonogo::tiers

@@ -1,10 +1,17 @@
-#include "solvers/terramech/empirical_tier.h"
+#include "solvers/tiers/empirical_tier.h"
 
-#include "solvers/terramech/brixius.h"
+namespace gonogo::tiers {
 
-namespace gonogo::terramech {
+using namespace terramech;
 
-TractionCurve EmpiricalTier::Compute(const TractionRequest& request) const {
+TierDescription EmpiricalTier::Describe() const {
+  return {"Brixius (1987) WES mobility-number traction equations; NRMM soft-soil test per vehicle",
+          "cone index; tyre diameter, width, section height, deflection; wheel load",
+          "microseconds"};
+}
+
+TractionCurve EmpiricalTier::ComputeCurve(const TractionRequest& request,
+                                          const ComputeContext& /*context*/) const {
   request.Validate();
   const double load_n = request.wheel_load_n;
   const TyreGeometry& tyre = request.tyre;
@@ -32,4 +39,4 @@ TractionCurve EmpiricalTier::Compute(const TractionRequest& request) const {
   return curve;
 }
 
-}  // namespace gonogo::terramech
+}  // namespace gonogo::tiers

@@ -1,7 +1,7 @@
 // The bekker tier: soil resolution, every TractionPoint field from the kernels of bekker.h, the
 // rigid / elastic mode rule of Wong (2008) 2.7.2, cancellation between slip points, input errors
 // and registration.
-#include "solvers/terramech/bekker_tier.h"
+#include "solvers/tiers/bekker_tier.h"
 
 #include <gtest/gtest.h>
 
@@ -13,8 +13,9 @@
 #include "solvers/common/tier.h"
 #include "solvers/terramech/bekker.h"
 
-namespace gonogo::terramech {
+namespace gonogo::tiers {
 namespace {
+using namespace gonogo::terramech;  // the kernels the adapters call
 
 // FED Alpha 335/65R22.5 of seed 001 Table 4 (d 1.011 m, b 0.335 m, h = 0.65 b, delta = 0.15 h,
 // r = 0.505 m) carrying 13438 N; inflation pressure not given (0): a rigid wheel.
@@ -182,4 +183,4 @@ TEST(BekkerTier, RegistersAndIsFoundByName) {
 }
 
 }  // namespace
-}  // namespace gonogo::terramech
+}  // namespace gonogo::tiers

@@ -7,8 +7,9 @@
 #include <string>
 
 #include "solvers/common/tier.h"
+#include "solvers/terramech/brixius.h"
 
-namespace gonogo::terramech {
+namespace gonogo::tiers {
 
 // Fills every TractionPoint field at each requested slip s, for wheel load W, rolling radius r:
 //   gross_traction_n    GT = W * GT/W                     (Brixius eq. 21)
@@ -25,7 +26,11 @@ class EmpiricalTier : public TractionTier {
  public:
   std::string Name() const override { return "empirical"; }
   std::string Version() const override { return "empirical-1"; }
-  TractionCurve Compute(const TractionRequest& request) const override;
+  TierDescription Describe() const override;
+
+ protected:
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override;
 };
 
-}  // namespace gonogo::terramech
+}  // namespace gonogo::tiers

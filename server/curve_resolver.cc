@@ -1,0 +1,145 @@
+#include "server/curve_resolver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#include "cache/curve_key.h"
+
+namespace gonogo::server {
+
+namespace {
+
+int64_t NowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Results and progress of the outstanding tasks, filled on pool threads.
+struct Inbox {
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::deque<TaskResult> results;
+};
+
+}  // namespace
+
+CurveTask CurveResolver::Prepare(const TractionTier& tier, TractionRequest request,
+                                 const std::string& soil_field) {
+  request.soil = SoilForTier(tier, std::move(request.soil));
+  request.Validate();
+  tier.ValidateSoil(request.soil, soil_field);
+  CurveTask task;
+  task.request = cache::Quantise(request);
+  task.request.Validate();
+  task.key = cache::CurveKey(tier.Name(), tier.Version(), task.request);
+  return task;
+}
+
+std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
+                                               const std::vector<CurveTask>& tasks,
+                                               const ResolveOptions& options) {
+  std::vector<Resolution> out(tasks.size());
+  // 1. The cache: exact key, then a similar tyre.
+  for (size_t i = 0; i < tasks.size(); ++i) {
+    auto found =
+        LookUpCurve(store_, tier, tasks[i].request, tasks[i].key, options.allow_similarity);
+    if (!found) continue;
+    Resolution& r = out[i];
+    r.source = found->similarity ? CurveSource::kCacheSimilar : CurveSource::kCacheExact;
+    r.curve = found->curve;
+    r.stored = found->source;
+    r.cached = std::move(found);
+  }
+  if (options.after_lookups) options.after_lookups(out);
+
+  // 2. The misses go to the pool, at most kInFlightPerWorker per worker at a time, so that
+  //    several callers (map jobs running at once, curve queries) interleave in the pool's queue
+  //    instead of one waiting behind the whole of another. Each result is stored as it arrives.
+  auto inbox = std::make_shared<Inbox>();
+  std::deque<size_t> unsent;
+  for (size_t i = 0; i < tasks.size(); ++i) {
+    if (!out[i].ok()) unsent.push_back(i);
+  }
+  const size_t in_flight_limit =
+      std::max<size_t>(2, kInFlightPerWorker * static_cast<size_t>(std::max(1, pool_.Workers())));
+  std::map<uint64_t, size_t> outstanding;  // pool task id -> task index
+  auto submit_more = [&] {
+    while (!unsent.empty() && outstanding.size() < in_flight_limit) {
+      const size_t i = unsent.front();
+      unsent.pop_front();
+      TaskSpec spec;
+      spec.task_id = next_task_id_++;
+      spec.tier = tier.Name();
+      spec.request = tasks[i].request;
+      spec.debug_delay_ms = options.debug_delay_ms;
+      spec.needs = tier.Needs(tasks[i].request);
+      if (options.on_task_progress) {
+        spec.progress = [report = options.on_task_progress, i](double f) { report(i, f); };
+      }
+      outstanding[spec.task_id] = i;
+      pool_.Submit(std::move(spec), [inbox](TaskResult r) {
+        std::lock_guard<std::mutex> lock(inbox->mutex);
+        inbox->results.push_back(std::move(r));
+        inbox->arrived.notify_one();
+      });
+    }
+  };
+  submit_more();
+
+  bool stopped = false;
+  bool failed = false;
+  while (!outstanding.empty()) {
+    std::deque<TaskResult> batch;
+    {
+      std::unique_lock<std::mutex> lock(inbox->mutex);
+      inbox->arrived.wait_for(lock, std::chrono::milliseconds(100),
+                              [&] { return !inbox->results.empty(); });
+      batch.swap(inbox->results);
+    }
+    for (TaskResult& result : batch) {
+      auto it = outstanding.find(result.task_id);
+      if (it == outstanding.end()) continue;
+      const size_t i = it->second;
+      outstanding.erase(it);
+      Resolution& r = out[i];
+      if (result.ok) {
+        result.curve.tier = tier.Name();
+        r.source = CurveSource::kComputed;
+        r.stored = cache::StoredCurve{tasks[i].key,        tasks[i].request,
+                                      result.curve,        result.computed_by,
+                                      result.compute_seconds, NowMs()};
+        store_.Put(r.stored);  // committed now: a crash loses no finished curve
+        r.curve = std::move(result.curve);
+      } else {
+        r.source = result.cancelled ? CurveSource::kCancelled : CurveSource::kFailed;
+        r.error_kind = result.cancelled ? ErrorKind::kCancelled : result.error_kind;
+        r.error = result.error;
+        failed = failed || !result.cancelled;
+      }
+      if (options.on_task_end) options.on_task_end(i, r);
+    }
+    const bool stop = (options.stop && options.stop()) ||
+                      std::chrono::steady_clock::now() > options.deadline ||
+                      (failed && options.stop_on_failure);
+    if (stop && !stopped) {
+      for (const auto& [task_id, _] : outstanding) pool_.Cancel(task_id);
+      stopped = true;
+    }
+    if (!stopped) submit_more();
+  }
+  // What was never sent is cancelled.
+  for (size_t i : unsent) {
+    out[i].source = CurveSource::kCancelled;
+    out[i].error_kind = ErrorKind::kCancelled;
+    out[i].error = "cancelled";
+  }
+  return out;
+}
+
+}  // namespace gonogo::server

@@ -1,0 +1,90 @@
+// The one component that resolves traction curves, for map jobs, single-curve queries and the
+// scalability study alike (ARCHITECTURE sections 2 and 6):
+//   1. exact cache key, 2. (when allowed) a similar tyre on the same soil (seed 001 similarity),
+//   3. else a task on the worker pool, whose curve is stored the moment it arrives (a crash loses
+//      no finished curve).
+// Task ids come from one counter, so cancelling one caller's task never touches another's.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cache/curve_store.h"
+#include "server/curve_lookup.h"
+#include "server/worker_pool.h"
+#include "solvers/common/errors.h"
+#include "solvers/common/tier.h"
+
+namespace gonogo::server {
+
+// One curve to resolve: a request already quantised (cache::Quantise) and its key.
+struct CurveTask {
+  TractionRequest request;
+  std::string key;
+};
+
+enum class CurveSource { kUnresolved, kCacheExact, kCacheSimilar, kComputed, kFailed, kCancelled };
+
+struct Resolution {
+  CurveSource source = CurveSource::kUnresolved;
+  TractionCurve curve;                 // the answer (for a similarity hit: scaled to the request)
+  std::optional<CachedAnswer> cached;  // set for cache hits
+  cache::StoredCurve stored;           // the stored curve behind the answer (computed or cached)
+  ErrorKind error_kind = ErrorKind::kNone;  // kFailed / kCancelled: why
+  std::string error;
+
+  bool ok() const {
+    return source == CurveSource::kCacheExact || source == CurveSource::kCacheSimilar ||
+           source == CurveSource::kComputed;
+  }
+};
+
+struct ResolveOptions {
+  bool allow_similarity = true;
+  uint32_t debug_delay_ms = 0;  // fault-injection delay on every computed task
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  // Polled about every 100 ms while tasks are out: true cancels what is outstanding.
+  std::function<bool()> stop;
+  // A failed task cancels the rest (a map cannot be drawn with a hole in it).
+  bool stop_on_failure = false;
+  // After the cache lookups, before any task is sent: the resolutions so far.
+  std::function<void(const std::vector<Resolution>&)> after_lookups;
+  // Each computed, failed or cancelled task as it ends (on the resolving thread).
+  std::function<void(size_t index, const Resolution&)> on_task_end;
+  // A running task's progress (fraction of its curve), from a pool thread.
+  std::function<void(size_t index, double fraction)> on_task_progress;
+};
+
+// Tasks a Resolve call keeps in the pool per worker: enough to keep every worker busy, few enough
+// that callers running at once take turns.
+inline constexpr size_t kInFlightPerWorker = 2;
+
+class CurveResolver {
+ public:
+  CurveResolver(cache::CurveStore& store, WorkerPool& pool) : store_(store), pool_(pool) {}
+
+  // The quantised, validated request and its cache key, for `tier`: strips what the tier does not
+  // read, snaps to the key's resolution, validates. Throws InputError naming the field.
+  static CurveTask Prepare(const TractionTier& tier, TractionRequest request,
+                           const std::string& soil_field = "soil");
+
+  // Resolves every task; returns one Resolution per task, in order. Blocks the calling thread (not
+  // a solver thread) until every task has ended or been cancelled; never throws for a task's
+  // failure (it is in the Resolution), only for database errors.
+  std::vector<Resolution> Resolve(const TractionTier& tier, const std::vector<CurveTask>& tasks,
+                                  const ResolveOptions& options);
+
+  WorkerPool& pool() { return pool_; }
+
+ private:
+  cache::CurveStore& store_;
+  WorkerPool& pool_;
+  std::atomic<uint64_t> next_task_id_{1};
+};
+
+}  // namespace gonogo::server

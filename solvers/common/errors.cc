@@ -1,0 +1,64 @@
+#include "solvers/common/errors.h"
+
+#include <exception>
+
+namespace gonogo {
+
+const char* ErrorKindName(ErrorKind kind) {
+  switch (kind) {
+    case ErrorKind::kNone: return "no error";
+    case ErrorKind::kBadInput: return "bad input";
+    case ErrorKind::kCannotCarry: return "soil cannot carry";
+    case ErrorKind::kLimit: return "limit exceeded";
+    case ErrorKind::kNumerical: return "numerical failure";
+    case ErrorKind::kCancelled: return "cancelled";
+    case ErrorKind::kInternal: return "internal error";
+  }
+  return "internal error";
+}
+
+ClassifiedError ClassifyCurrentException() {
+  try {
+    throw;
+  } catch (const CannotCarryError& e) {  // before InputError, which it derives from
+    return {ErrorKind::kCannotCarry, e.what(), e.field()};
+  } catch (const InputError& e) {
+    return {ErrorKind::kBadInput, e.what(), e.field()};
+  } catch (const LimitError& e) {
+    return {ErrorKind::kLimit, e.what(), e.field()};
+  } catch (const NumericalError& e) {
+    return {ErrorKind::kNumerical, e.what(), ""};
+  } catch (const CancelledError& e) {
+    return {ErrorKind::kCancelled, e.what(), ""};
+  } catch (const std::exception& e) {
+    return {ErrorKind::kInternal, e.what(), ""};
+  } catch (...) {
+    return {ErrorKind::kInternal, "unknown error", ""};
+  }
+}
+
+namespace {
+
+// InputError and friends prefix their message with "field: "; a message that crossed a rank
+// boundary already carries it, so it is not added twice.
+std::string Reason(const std::string& field, const std::string& message) {
+  const std::string prefix = field + ": ";
+  return !field.empty() && message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
+}
+
+}  // namespace
+
+void ThrowError(ErrorKind kind, const std::string& field, const std::string& message) {
+  switch (kind) {
+    case ErrorKind::kBadInput: throw InputError(field, Reason(field, message));
+    case ErrorKind::kCannotCarry: throw CannotCarryError(field, Reason(field, message));
+    case ErrorKind::kLimit: throw LimitError(field, Reason(field, message));
+    case ErrorKind::kNumerical: throw NumericalError(message);
+    case ErrorKind::kCancelled: throw CancelledError();
+    case ErrorKind::kNone:
+    case ErrorKind::kInternal: break;
+  }
+  throw std::runtime_error(message);
+}
+
+}  // namespace gonogo
