@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "solvers/common/soil_model.h"
+
 namespace gonogo::cache {
 
 namespace {
@@ -16,15 +18,6 @@ std::string Fixed(double value, int decimals) {
   return buf;
 }
 }  // namespace
-
-std::string BekkerText(const SoilState& soil) {
-  if (!soil.bekker) return "";
-  const BekkerParameters& b = *soil.bekker;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "n=%.9g,kc=%.9g,kphi=%.9g,c=%.9g,phi_deg=%.9g,K=%.9g", b.n, b.kc,
-                b.kphi, b.cohesion_pa, b.friction_angle_deg, b.shear_deformation_m);
-  return buf;
-}
 
 int ConeIndexBin(double cone_index_pa) {
   if (cone_index_pa <= 0) return INT_MIN;
@@ -49,15 +42,10 @@ TractionRequest Quantise(const TractionRequest& r) {
   q.tyre.inflation_pressure_pa = Snap(r.tyre.inflation_pressure_pa, kPressureResolutionPa);
   q.wheel_load_n = Snap(r.wheel_load_n, kLoadResolutionN);
   for (double& s : q.slips) s = Snap(s, kSlipResolution);
-  if (q.soil.bekker) {
-    // Snap to the nine significant digits of the key so the computed curve is the key's curve.
-    BekkerParameters& b = *q.soil.bekker;
-    for (double* v : {&b.n, &b.kc, &b.kphi, &b.cohesion_pa, &b.friction_angle_deg,
-                      &b.shear_deformation_m}) {
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "%.9g", *v);
-      *v = std::strtod(buf, nullptr);
-    }
+  if (q.soil.parameters) {
+    // Defaults filled and snapped to the key's digits, so the computed curve is the key's curve.
+    q.soil.parameters =
+        SnapToCanonical(SoilModels().Validate(*q.soil.parameters, "soil.parameters"));
   }
   return q;
 }
@@ -71,7 +59,7 @@ std::string CurveKey(const std::string& tier, const std::string& tier_version,
                     ";delta_m=" + Fixed(q.tyre.deflection_m, 4) +
                     ";r_m=" + Fixed(q.tyre.rolling_radius_m, 4) +
                     ";pi_pa=" + Fixed(q.tyre.inflation_pressure_pa, 0) +
-                    ";w_n=" + Fixed(q.wheel_load_n, 0) + ";bekker=" + BekkerText(q.soil) +
+                    ";w_n=" + Fixed(q.wheel_load_n, 0) + ";params=" + CanonicalText(q.soil.parameters) +
                     ";slips=";
   for (size_t i = 0; i < q.slips.size(); ++i) {
     if (i) key += ',';
@@ -82,10 +70,10 @@ std::string CurveKey(const std::string& tier, const std::string& tier_version,
 
 std::string SimilarityGroup(const std::string& tier, const std::string& tier_version,
                             const TractionRequest& q) {
-  std::string group = "gonogo-similar-v1;tier=" + tier + ";version=" + tier_version +
+  std::string group = std::string(kSimilarityGroupVersion) + ";tier=" + tier + ";version=" + tier_version +
                       ";soil=" + q.soil.soil_name + ";ci_pa=" + Fixed(q.soil.cone_index_pa, 2) +
                       ";pi_pa=" + Fixed(q.tyre.inflation_pressure_pa, 0) +
-                      ";bekker=" + BekkerText(q.soil) + ";slips=";
+                      ";params=" + CanonicalText(q.soil.parameters) + ";slips=";
   for (size_t i = 0; i < q.slips.size(); ++i) {
     if (i) group += ',';
     group += Fixed(q.slips[i], 6);

@@ -2,9 +2,10 @@
 //
 // A request is first snapped to the key's resolution and then computed with the snapped values, so a
 // cached curve is exactly the curve of its key: cone index on logarithmic bins 1 % apart, lengths to
-// 0.1 mm, wheel load to 1 N, inflation pressure to 100 Pa, slips to 1e-6; explicit Bekker parameters
-// enter with nine significant digits. The tier's version is part of the key, so a solver change
-// never serves a stale curve.
+// 0.1 mm, wheel load to 1 N, inflation pressure to 100 Pa, slips to 1e-6; explicit soil-model
+// parameters enter as their canonical text (solvers/common/soil_model.h: defaults filled, sorted,
+// nine significant digits). The tier's version is part of the key, so a solver change never serves
+// a stale curve.
 #pragma once
 
 #include <string>
@@ -13,7 +14,8 @@
 
 namespace gonogo::cache {
 
-inline constexpr char kCurveKeyVersion[] = "gonogo-curve-v1";
+inline constexpr char kCurveKeyVersion[] = "gonogo-curve-v2";
+inline constexpr char kSimilarityGroupVersion[] = "gonogo-similar-v2";
 inline constexpr double kConeIndexBinRatio = 1.01;   // adjacent cone-index bins differ by 1 %
 inline constexpr double kLengthResolutionM = 1e-4;   // 0.1 mm
 inline constexpr double kLoadResolutionN = 1.0;
@@ -24,10 +26,10 @@ inline constexpr double kPressureResolutionPa = 100.0;  // inflation pressure
 int ConeIndexBin(double cone_index_pa);
 // The representative cone index (Pa) of a bin.
 double ConeIndexOfBin(int bin);
-// Snaps every field of the request to the key's resolution.
+// Snaps every field of the request to the key's resolution; explicit soil parameters get their
+// model's defaults (SoilModels().Validate, which throws InputError for an invalid set) and nine
+// significant digits.
 TractionRequest Quantise(const TractionRequest& request);
-// Canonical text of explicit Bekker parameters ("" when none): nine significant digits each.
-std::string BekkerText(const SoilState& soil);
 // Key of an already quantised request.
 std::string CurveKey(const std::string& tier, const std::string& tier_version,
                      const TractionRequest& quantised);

@@ -35,21 +35,19 @@ std::vector<TractionPoint> UnpackPoints(const std::string& blob) {
   return points;
 }
 
-// Inverse of BekkerText: "" gives no parameters.
-std::optional<BekkerParameters> ParseBekkerText(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  BekkerParameters b;
-  if (std::sscanf(text.c_str(), "n=%lf,kc=%lf,kphi=%lf,c=%lf,phi_deg=%lf,K=%lf", &b.n, &b.kc,
-                  &b.kphi, &b.cohesion_pa, &b.friction_angle_deg, &b.shear_deformation_m) != 6) {
-    throw DatabaseError("unreadable Bekker parameters in the curve cache: " + text);
+// The stored canonical text of a curve's soil parameters; "" gives none.
+std::optional<SoilParameters> ParseStoredParameters(const std::string& text) {
+  try {
+    return ParseCanonicalText(text);
+  } catch (const std::invalid_argument&) {
+    throw DatabaseError("unreadable soil parameters in the curve cache: " + text);
   }
-  return b;
 }
 
 constexpr char kColumns[] =
     "id, cache_key, tier, tier_version, soil_name, cone_index_pa, diameter_m, width_m, "
     "section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, computed_by, "
-    "compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa, immobile_reason";
+    "compute_seconds, computed_unix_ms, soil_parameters, inflation_pressure_pa, immobile_reason";
 
 StoredCurve ReadRow(const Statement& s) {
   StoredCurve c;
@@ -65,7 +63,7 @@ StoredCurve ReadRow(const Statement& s) {
   c.computed_by = s.Text(13);
   c.compute_seconds = s.Double(14);
   c.computed_unix_ms = s.Int(15);
-  c.request.soil.bekker = ParseBekkerText(s.Text(16));
+  c.request.soil.parameters = ParseStoredParameters(s.Text(16));
   c.request.tyre.inflation_pressure_pa = s.Double(17);
   c.curve.immobile_reason = s.Text(18);
   return c;
@@ -86,7 +84,7 @@ bool CurveStore::Put(const StoredCurve& c) {
   Statement s = db_.Prepare(
       "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
       "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
-      "computed_by, compute_seconds, computed_unix_ms, bekker, inflation_pressure_pa, "
+      "computed_by, compute_seconds, computed_unix_ms, soil_parameters, inflation_pressure_pa, "
       "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa, immobile_reason) "
       "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const std::string blob = PackPoints(c.curve.points);
@@ -97,7 +95,8 @@ bool CurveStore::Put(const StoredCurve& c) {
   s.Bind(10, c.request.tyre.RollingRadius()).Bind(11, c.request.wheel_load_n);
   s.BindBlob(12, blob.data(), blob.size());
   s.Bind(13, c.computed_by).Bind(14, c.compute_seconds).Bind(15, c.computed_unix_ms);
-  s.Bind(16, BekkerText(c.request.soil)).Bind(17, c.request.tyre.inflation_pressure_pa);
+  s.Bind(16, CanonicalText(c.request.soil.parameters));
+  s.Bind(17, c.request.tyre.inflation_pressure_pa);
   const mobility::PiTerms pi = mobility::ComputePiTerms(c.request);
   s.Bind(18, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request));
   s.Bind(19, pi.width_over_diameter).Bind(20, pi.deflection_over_height);

@@ -1,6 +1,9 @@
 #include "cache/database.h"
 
+#include <cstdio>
 #include <vector>
+
+#include "solvers/common/traction.h"
 
 namespace gonogo::cache {
 
@@ -65,8 +68,45 @@ const std::vector<std::string>& Migrations() {
       ALTER TABLE curves ADD COLUMN immobile_reason TEXT NOT NULL DEFAULT '';
       ALTER TABLE jobs ADD COLUMN similarity_hits INTEGER NOT NULL DEFAULT 0;
       )sql",
+      // 3 -> 4: open soil description. The Bekker text becomes the canonical text of a soil-model
+      // parameter set (solvers/common/soil_model.h), and every key and similarity group is rewritten
+      // to the v2 form (";bekker=TEXT;" -> ";params=CANONICAL;"), so that each stored curve is found
+      // under the key the current code computes for its request: nothing is lost, nothing stale.
+      R"sql(
+      ALTER TABLE curves ADD COLUMN soil_parameters TEXT NOT NULL DEFAULT '';
+      UPDATE curves SET soil_parameters = gonogo_v3_bekker_to_canonical(bekker) WHERE bekker != '';
+      UPDATE curves SET
+        cache_key = replace(replace(cache_key, ';bekker=' || bekker || ';',
+                                    ';params=' || soil_parameters || ';'),
+                            'gonogo-curve-v1;', 'gonogo-curve-v2;'),
+        similarity_group = replace(replace(similarity_group, ';bekker=' || bekker || ';',
+                                           ';params=' || soil_parameters || ';'),
+                                   'gonogo-similar-v1;', 'gonogo-similar-v2;');
+      ALTER TABLE curves DROP COLUMN bekker;
+      )sql",
+      // 4 -> 5: jobs of more than one kind (map, curve); older jobs are maps.
+      R"sql(
+      ALTER TABLE jobs ADD COLUMN kind TEXT NOT NULL DEFAULT 'map';
+      )sql",
   };
   return kMigrations;
+}
+
+// SQL function for migration 3 -> 4: schema-3 Bekker text "n=..,kc=..,kphi=..,c=..,phi_deg=..,K=.."
+// to the canonical text of the bekker soil model. NULL for text it cannot read, which fails the
+// migration (NOT NULL column) rather than keep a curve under a key nobody computes.
+void BekkerTextToCanonical(sqlite3_context* context, int, sqlite3_value** argv) {
+  const auto* text = reinterpret_cast<const char*>(sqlite3_value_text(argv[0]));
+  BekkerParameters b;
+  if (text == nullptr ||
+      std::sscanf(text, "n=%lf,kc=%lf,kphi=%lf,c=%lf,phi_deg=%lf,K=%lf", &b.n, &b.kc, &b.kphi,
+                  &b.cohesion_pa, &b.friction_angle_deg, &b.shear_deformation_m) != 6) {
+    sqlite3_result_null(context);
+    return;
+  }
+  const std::string canonical = CanonicalText(b.ToSoilModel());
+  sqlite3_result_text(context, canonical.c_str(), static_cast<int>(canonical.size()),
+                      SQLITE_TRANSIENT);
 }
 
 void Check(sqlite3* db, int rc, const std::string& what) {
@@ -136,6 +176,9 @@ Database::Database(const std::string& path) : path_(path) {
     throw DatabaseError("cannot open " + path + ": " + msg);
   }
   sqlite3_busy_timeout(db_, 10000);
+  sqlite3_create_function_v2(db_, "gonogo_v3_bekker_to_canonical", 1,
+                             SQLITE_UTF8 | SQLITE_DETERMINISTIC, nullptr, BekkerTextToCanonical,
+                             nullptr, nullptr, nullptr);
   Exec("PRAGMA journal_mode=WAL");
   // NORMAL is durable across application crashes in WAL mode; only power loss can drop the last commits.
   Exec("PRAGMA synchronous=NORMAL");

@@ -8,7 +8,7 @@ namespace {
 
 constexpr char kColumns[] =
     "id, name, tier, state, fraction_done, tasks_done, tasks_total, cache_hits, message, request, "
-    "summary_json, products, created_unix_ms, finished_unix_ms, similarity_hits";
+    "summary_json, products, created_unix_ms, finished_unix_ms, similarity_hits, kind";
 
 std::string JoinProducts(const std::vector<std::string>& products) {
   std::string out;
@@ -36,6 +36,7 @@ JobRecord ReadRow(const Statement& s) {
   j.created_unix_ms = s.Int(12);
   j.finished_unix_ms = s.Int(13);
   j.similarity_hits = s.Int(14);
+  j.kind = s.Text(15);
   return j;
 }
 
@@ -59,10 +60,11 @@ const char* JobStateName(JobState s) {
 void JobStore::Create(const JobRecord& j) {
   WriteTransaction tx(db_);
   Statement s = db_.Prepare(
-      "INSERT INTO jobs (id, name, tier, state, message, request, created_unix_ms) "
-      "VALUES (?,?,?,?,?,?,?)");
+      "INSERT INTO jobs (id, name, tier, state, message, request, created_unix_ms, kind) "
+      "VALUES (?,?,?,?,?,?,?,?)");
   s.Bind(1, j.id).Bind(2, j.name).Bind(3, j.tier).Bind(4, static_cast<int64_t>(j.state));
   s.Bind(5, j.message).BindBlob(6, j.request.data(), j.request.size()).Bind(7, j.created_unix_ms);
+  s.Bind(8, j.kind);
   s.Run();
   tx.Commit();
 }

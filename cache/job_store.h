@@ -1,4 +1,4 @@
-// Persistent map jobs. Every state change is committed at once, so a restarted server knows which
+// Persistent jobs: maps, and traction curves too long to answer within one RPC. Every state change is committed at once, so a restarted server knows which
 // jobs to resume (QUEUED and RUNNING) and which are finished.
 #pragma once
 
@@ -17,8 +17,12 @@ enum class JobState { kQueued = 1, kRunning = 2, kDone = 3, kFailed = 4, kCancel
 bool IsTerminal(JobState state);
 const char* JobStateName(JobState state);
 
+inline constexpr char kMapJob[] = "map";      // request: a serialised gonogo.v1.MapRequest
+inline constexpr char kCurveJob[] = "curve";  // request: a serialised GetTractionCurveRequest
+
 struct JobRecord {
   std::string id;
+  std::string kind = kMapJob;
   std::string name;
   std::string tier;
   JobState state = JobState::kQueued;

@@ -12,6 +12,8 @@ packages=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc grpc-proto
   # storage, rasters, JSON
   libsqlite3-dev sqlite3 libgdal-dev gdal-bin python3-gdal nlohmann-json3-dev
+  # command-line parsing for every program; structured logging in the server
+  libcli11-dev libspdlog-dev
   # tests
   libgtest-dev libgmock-dev
 )

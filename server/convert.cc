@@ -11,37 +11,53 @@ TyreGeometry FromProto(const v1::Tyre& t) {
                       t.deflection_m(), t.rolling_radius_m(), t.inflation_pressure_pa()};
 }
 
-std::optional<BekkerParameters> BekkerFromProto(bool present, const v1::BekkerParameters& p) {
-  if (!present) return std::nullopt;
-  return BekkerParameters{p.n(),           p.kc(),
-                          p.kphi(),        p.cohesion_pa(),
-                          p.friction_angle_deg(), p.shear_deformation_m()};
+std::optional<SoilParameters> SoilParametersFromProto(bool has_parameters,
+                                                     const v1::SoilParameterSet& parameters,
+                                                     bool has_bekker,
+                                                     const v1::BekkerParameters& bekker) {
+  if (has_parameters) {
+    SoilParameters p;
+    p.model = parameters.model();
+    p.values.insert(parameters.values().begin(), parameters.values().end());
+    return p;
+  }
+  if (!has_bekker) return std::nullopt;
+  return BekkerParameters{bekker.n(),           bekker.kc(),
+                          bekker.kphi(),        bekker.cohesion_pa(),
+                          bekker.friction_angle_deg(), bekker.shear_deformation_m()}
+      .ToSoilModel();
 }
 
-v1::BekkerParameters ToProto(const BekkerParameters& b) {
-  v1::BekkerParameters p;
-  p.set_n(b.n);
-  p.set_kc(b.kc);
-  p.set_kphi(b.kphi);
-  p.set_cohesion_pa(b.cohesion_pa);
-  p.set_friction_angle_deg(b.friction_angle_deg);
-  p.set_shear_deformation_m(b.shear_deformation_m);
-  return p;
+v1::SoilParameterSet ToProto(const SoilParameters& p) {
+  v1::SoilParameterSet out;
+  out.set_model(p.model);
+  out.mutable_values()->insert(p.values.begin(), p.values.end());
+  return out;
 }
 
 SoilState FromProto(const v1::SoilState& p) {
   SoilState s;
   s.cone_index_pa = p.cone_index_pa();
   s.soil_name = p.soil_name();
-  s.bekker = BekkerFromProto(p.has_bekker(), p.bekker());
+  s.parameters =
+      SoilParametersFromProto(p.has_parameters(), p.parameters(), p.has_bekker(), p.bekker());
   return s;
+}
+
+TractionRequest FromProto(const v1::GetTractionCurveRequest& request) {
+  TractionRequest r;
+  r.tyre = FromProto(request.tyre());
+  r.wheel_load_n = request.wheel_load_n();
+  r.soil = FromProto(request.soil());
+  r.slips = TractionRequest::SlipSweep(request.slip_step() == 0 ? 0.05 : request.slip_step());
+  return r;
 }
 
 v1::SoilState ToProto(const SoilState& s) {
   v1::SoilState p;
   p.set_cone_index_pa(s.cone_index_pa);
   p.set_soil_name(s.soil_name);
-  if (s.bekker) *p.mutable_bekker() = ToProto(*s.bekker);
+  if (s.parameters) *p.mutable_parameters() = ToProto(*s.parameters);
   return p;
 }
 

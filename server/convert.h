@@ -17,9 +17,17 @@ TyreGeometry FromProto(const v1::Tyre& tyre);
 v1::Tyre ToProto(const TyreGeometry& tyre);
 TractionPoint FromProto(const v1::TractionPoint& point);
 // Bekker parameters of a message that has them, else nullopt.
-std::optional<BekkerParameters> BekkerFromProto(bool present, const v1::BekkerParameters& p);
-v1::BekkerParameters ToProto(const BekkerParameters& b);
+// The explicit parameter set of a soil state or soil class: `parameters` when present, else the
+// deprecated Bekker alias as a "bekker" set, else none.
+std::optional<SoilParameters> SoilParametersFromProto(bool has_parameters,
+                                                     const v1::SoilParameterSet& parameters,
+                                                     bool has_bekker,
+                                                     const v1::BekkerParameters& bekker);
+v1::SoilParameterSet ToProto(const SoilParameters& p);
 SoilState FromProto(const v1::SoilState& soil);
+// The request of a curve query: tyre, load, soil and the slip sweep (slip_step 0: 0.05). Not
+// validated; throws InputError("slip_step") for a bad step.
+TractionRequest FromProto(const v1::GetTractionCurveRequest& request);
 v1::SoilState ToProto(const SoilState& soil);
 v1::TractionPoint ToProto(const TractionPoint& point);
 

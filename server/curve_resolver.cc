@@ -8,6 +8,8 @@
 #include <memory>
 #include <mutex>
 
+#include <spdlog/spdlog.h>
+
 #include "cache/curve_key.h"
 
 namespace gonogo::server {
@@ -57,6 +59,7 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
     r.cached = std::move(found);
   }
   if (options.after_lookups) options.after_lookups(out);
+  if (options.lookup_only) return out;
 
   // 2. The misses go to the pool, at most kInFlightPerWorker per worker at a time, so that
   //    several callers (map jobs running at once, curve queries) interleave in the pool's queue
@@ -121,6 +124,10 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
         r.error_kind = result.cancelled ? ErrorKind::kCancelled : result.error_kind;
         r.error = result.error;
         failed = failed || !result.cancelled;
+        if (!result.cancelled) {
+          spdlog::warn("traction task {} ({}) failed, {}: {}", result.task_id, tier.Name(),
+                       ErrorKindName(result.error_kind), result.error);
+        }
       }
       if (options.on_task_end) options.on_task_end(i, r);
     }

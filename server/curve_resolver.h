@@ -30,6 +30,10 @@ struct CurveTask {
 
 enum class CurveSource { kUnresolved, kCacheExact, kCacheSimilar, kComputed, kFailed, kCancelled };
 
+// A curve query on a tier expected to take at least this long is a job (SubmitCurve), never
+// computed inside one RPC.
+inline constexpr double kLongQuerySeconds = 60.0;
+
 struct Resolution {
   CurveSource source = CurveSource::kUnresolved;
   TractionCurve curve;                 // the answer (for a similarity hit: scaled to the request)
@@ -52,6 +56,8 @@ struct ResolveOptions {
   std::function<bool()> stop;
   // A failed task cancels the rest (a map cannot be drawn with a hole in it).
   bool stop_on_failure = false;
+  // Only the cache: misses stay kUnresolved and nothing is sent to the pool.
+  bool lookup_only = false;
   // After the cache lookups, before any task is sent: the resolutions so far.
   std::function<void(const std::vector<Resolution>&)> after_lookups;
   // Each computed, failed or cancelled task as it ends (on the resolving thread).

@@ -1,5 +1,8 @@
 #include "server/job_manager.h"
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +14,7 @@
 #include "server/curve_lookup.h"
 #include "server/curve_resolver.h"
 #include "server/geo/products.h"
+#include "server/job_records.h"
 #include "server/map_plan.h"
 #include "server/summary.h"
 #include "solvers/common/errors.h"
@@ -21,12 +25,6 @@ namespace gonogo::server {
 namespace fs = std::filesystem;
 
 namespace {
-
-int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -40,31 +38,7 @@ std::optional<geo::RasterInput> OptionalRaster(const std::string& path) {
   return geo::RasterInput{ReadFile(path)};
 }
 
-v1::JobStatus StatusOf(const cache::JobRecord& j) {
-  v1::JobStatus s;
-  s.set_job_id(j.id);
-  s.set_state(static_cast<v1::JobState>(j.state));
-  s.set_fraction_done(j.fraction_done);
-  s.set_tasks_done(static_cast<uint32_t>(j.tasks_done));
-  s.set_tasks_total(static_cast<uint32_t>(j.tasks_total));
-  s.set_cache_hits(static_cast<uint32_t>(j.cache_hits));
-  s.set_similarity_hits(static_cast<uint32_t>(j.similarity_hits));
-  s.set_message(j.message);
-  return s;
-}
 
-v1::Job JobOf(const cache::JobRecord& j) {
-  v1::Job out;
-  out.set_job_id(j.id);
-  out.set_name(j.name);
-  out.set_tier(j.tier);
-  *out.mutable_status() = StatusOf(j);
-  out.set_created_unix_ms(j.created_unix_ms);
-  out.set_finished_unix_ms(j.finished_unix_ms);
-  for (const auto& p : j.products) out.add_products(p);
-  out.set_summary_json(j.summary_json);
-  return out;
-}
 
 std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
   std::map<int32_t, SoilClassInfo> out;
@@ -76,20 +50,18 @@ std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
     Require(std::isfinite(ri) && ri > 0 && ri <= 2, field + ".remolding_index",
             "must lie in (0, 2]");
     const std::string library_name = c.bekker_soil().empty() ? c.name() : c.bekker_soil();
-    out[c.code()] = SoilClassInfo{library_name, ri, BekkerFromProto(c.has_bekker(), c.bekker())};
-    if (out[c.code()].bekker) out[c.code()].bekker->Validate(field + ".bekker.");
+    out[c.code()] = SoilClassInfo{
+        library_name, ri,
+        SoilParametersFromProto(c.has_parameters(), c.parameters(), c.has_bekker(), c.bekker())};
+    if (out[c.code()].parameters) {
+      out[c.code()].parameters =
+          SoilModels().Validate(*out[c.code()].parameters, field + ".parameters");
+    }
   }
   return out;
 }
 
 }  // namespace
-
-struct JobManager::Live {
-  v1::JobStatus status;
-  uint64_t version = 1;
-  std::atomic<bool> cancel_requested{false};
-  std::shared_ptr<geo::TerrainLayers> terrain;
-};
 
 JobManager::JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
                        CurveResolver& resolver)
@@ -144,7 +116,7 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
             "the " + tier.Name() + " tier needs a soil-class raster and a soil table that names "
             "library soils or gives their parameters");
     for (const auto& [code, info] : soil_table) {
-      tier.ValidateSoil(SoilState{0, info.name, info.bekker},
+      tier.ValidateSoil(SoilState{0, info.name, info.parameters},
                         "soil_table.classes[code " + std::to_string(code) + "]");
     }
   }
@@ -172,11 +144,17 @@ v1::Job JobManager::Submit(const std::string& id, const v1::MapRequest& request,
                            std::shared_ptr<geo::TerrainLayers> terrain) {
   cache::JobRecord rec;
   rec.id = id;
+  rec.kind = cache::kMapJob;
   rec.name = request.name();
   rec.tier = request.tier();
+  rec.request = request.SerializeAsString();
+  return Enqueue(std::move(rec), std::move(terrain));
+}
+
+v1::Job JobManager::Enqueue(cache::JobRecord rec, std::shared_ptr<geo::TerrainLayers> terrain) {
+  const std::string id = rec.id;
   rec.state = cache::JobState::kQueued;
   rec.message = "queued";
-  rec.request = request.SerializeAsString();
   rec.created_unix_ms = NowMs();
   jobs_.Create(rec);
   {
@@ -235,6 +213,21 @@ void JobManager::Loop() {
       queue_.pop_front();
     }
     RunJob(id);
+  }
+}
+
+void JobManager::Finish(const std::string& id, cache::JobState state, const std::string& message,
+                        const std::string& summary, const std::vector<std::string>& products) {
+  jobs_.Finish(id, state, message, summary, products, NowMs());
+  Publish(id, StatusOf(*jobs_.Get(id)));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    live_.erase(id);  // watchers read ended jobs from the database
+  }
+  if (state == cache::JobState::kFailed) {
+    spdlog::warn("job {} {}: {}", id, cache::JobStateName(state), message);
+  } else {
+    spdlog::info("job {} {}: {}", id, cache::JobStateName(state), message);
   }
 }
 
@@ -322,6 +315,8 @@ void JobManager::RunJob(const std::string& id) {
     if (!live) live = live_[id] = std::make_shared<Live>();
   }
   if (!rec || cache::IsTerminal(rec->state)) return;
+  spdlog::info("job {} ({}, tier {}) started", id, rec->kind, rec->tier);
+  if (rec->kind == cache::kCurveJob) return RunCurveJob(*rec, live);
 
   const auto started = std::chrono::steady_clock::now();
   v1::JobStatus status = StatusOf(*rec);
@@ -336,10 +331,7 @@ void JobManager::RunJob(const std::string& id) {
   };
   auto finish = [&](cache::JobState state, const std::string& message, const std::string& summary,
                     const std::vector<std::string>& products) {
-    jobs_.Finish(id, state, message, summary, products, NowMs());
-    Publish(id, StatusOf(*jobs_.Get(id)));
-    std::lock_guard<std::mutex> lock(mutex_);
-    live_.erase(id);  // watchers read ended jobs from the database
+    Finish(id, state, message, summary, products);
   };
 
   try {
@@ -427,6 +419,7 @@ void JobManager::RunJob(const std::string& id) {
     if (!failure.empty()) return finish(cache::JobState::kFailed, failure, "", {});
     if (stopping) {
       jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
+      spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
       return;
     }
 

@@ -61,6 +61,9 @@ class JobManager {
   // Persists the job (QUEUED) and queues it. `terrain` may be null (it is then read from the inputs).
   v1::Job Submit(const std::string& job_id, const v1::MapRequest& request,
                  std::shared_ptr<geo::TerrainLayers> terrain);
+  // Validates a curve query (tier, tyre, load, soil: InputError naming the field) and persists it
+  // as a job of kind "curve" (QUEUED).
+  v1::Job SubmitCurve(const std::string& job_id, const v1::GetTractionCurveRequest& request);
   // Re-queues the jobs a previous run left QUEUED or RUNNING. Call once, before Start().
   int ResumeUnfinished();
   void Start();
@@ -79,10 +82,21 @@ class JobManager {
                                                                int timeout_ms);
 
  private:
-  struct Live;  // in-memory state of a queued or running job
+  struct Live {  // in-memory state of a queued or running job
+    v1::JobStatus status;
+    uint64_t version = 1;
+    std::atomic<bool> cancel_requested{false};
+    std::shared_ptr<geo::TerrainLayers> terrain;  // loaded at submission, read by the run
+  };
   void Loop();
   void RunJob(const std::string& job_id);
+  void RunCurveJob(const cache::JobRecord& record, const std::shared_ptr<Live>& live);
+  // Persists a new QUEUED job and queues it.
+  v1::Job Enqueue(cache::JobRecord record, std::shared_ptr<geo::TerrainLayers> terrain);
   void Publish(const std::string& job_id, const v1::JobStatus& status);
+  // Moves a job to its end state (persisted, published to watchers, logged).
+  void Finish(const std::string& job_id, cache::JobState state, const std::string& message,
+              const std::string& summary, const std::vector<std::string>& products);
   JobInputs InputsOf(const std::string& job_id) const;
 
   JobManagerConfig config_;

@@ -2,14 +2,18 @@
 //
 //   gonogo-server --data-dir DIR --listen HOST:PORT            one process, in-process worker threads
 //   mpirun -np N gonogo-server --data-dir DIR --listen ...     rank 0 serves, ranks 1..N-1 compute
+//   gonogo-server --help                                        every option, with its default
 //
 // Port 0 picks a free port; the chosen endpoint is printed ("listening on HOST:PORT") and, with
 // --endpoint-file, written to that file (mode 0600) for clients on a cluster.
+#include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <mpi.h>
 #include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -42,55 +46,38 @@ struct Options {
   int64_t max_cells = 25'000'000;
   int max_jobs = 2;
   bool diagnostic_tiers = false;
+  std::string log_level = "info";
 };
 
-void Usage(std::ostream& out) {
-  out << "usage: gonogo-server [--data-dir DIR] [--listen HOST:PORT] [--endpoint-file PATH]\n"
-         "                     [--threads N] [--max-cells N] [--max-jobs N] [--task-delay-ms MS]\n"
-         "                     [--diagnostic-tiers]\n"
-         "  --data-dir DIR       SQLite database and job files (default ./gonogo-data)\n"
-         "  --listen HOST:PORT   gRPC address; port 0 picks a free port (default 127.0.0.1:50051)\n"
-         "  --endpoint-file P    write the bound HOST:PORT to P (mode 0600)\n"
-         "  --threads N          in-process worker threads when not under MPI (default: cores)\n"
-         "  --max-cells N        largest raster, input or output, in cells (default 25000000)\n"
-         "  --max-jobs N         map jobs that run at once (default 2)\n"
-         "  --task-delay-ms MS   delay every traction task (fault-injection tests and demos)\n"
-         "  --diagnostic-tiers   also serve the diagnostic tiers (rank-group and failure probes)\n"
-         "Under mpirun or srun, rank 0 serves and ranks 1..N-1 compute traction tasks.\n";
-}
-
+// Parses the command line with CLI11: an unknown or mistyped option, a missing value or one out of
+// range is an error (exit 2) that names it.
 Options Parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << "gonogo-server: " << a << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    try {
-      if (a == "--data-dir") o.data_dir = value();
-      else if (a == "--listen") o.listen = value();
-      else if (a == "--endpoint-file") o.endpoint_file = value();
-      else if (a == "--threads") o.threads = std::stoi(value());
-      else if (a == "--task-delay-ms") o.task_delay_ms = static_cast<uint32_t>(std::stoul(value()));
-      else if (a == "--max-cells") o.max_cells = std::stoll(value());
-      else if (a == "--max-jobs") o.max_jobs = std::stoi(value());
-      else if (a == "--diagnostic-tiers") o.diagnostic_tiers = true;
-      else if (a == "--help" || a == "-h") {
-        Usage(std::cout);
-        std::exit(0);
-      } else {
-        std::cerr << "gonogo-server: unknown option " << a << "\n";
-        Usage(std::cerr);
-        std::exit(2);
-      }
-    } catch (const std::logic_error&) {
-      std::cerr << "gonogo-server: " << a << " needs a number\n";
-      std::exit(2);
-    }
+  CLI::App app{
+      "gonogo-server: the off-road mobility map service.\n"
+      "Under mpirun or srun, rank 0 serves and ranks 1..N-1 compute traction tasks; without a\n"
+      "launcher the tasks run on threads of this process.",
+      "gonogo-server"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("--data-dir", o.data_dir, "SQLite database and job files");
+  app.add_option("--listen", o.listen, "gRPC address HOST:PORT; port 0 picks a free port");
+  app.add_option("--endpoint-file", o.endpoint_file, "write the bound HOST:PORT to this file (mode 0600)");
+  app.add_option("--threads", o.threads, "in-process worker threads when not under MPI (0: one per core)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-cells", o.max_cells, "largest raster, input or output, in cells")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-jobs", o.max_jobs, "map and curve jobs that run at once")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--task-delay-ms", o.task_delay_ms,
+                 "delay every traction task by this many ms (fault-injection tests and demos)");
+  app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
+               "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
+  app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off (logs go to stderr)")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::exit(app.exit(e) == 0 ? 0 : 2);  // --help: 0; any usage error: 2, as the other programs
   }
   return o;
 }
@@ -122,7 +109,7 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   builder.SetMaxReceiveMessageSize(8 << 20);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
-    std::cerr << "gonogo-server: cannot listen on " << o.listen << "\n";
+    spdlog::error("cannot listen on {}", o.listen);
     return 1;
   }
   server->GetHealthCheckService()->SetServingStatus(kServiceName, true);
@@ -149,18 +136,27 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   // job returns to QUEUED), then stop gRPC and the pool.
   int sig = 0;
   sigwait(&signals, &sig);
-  std::cout << "gonogo-server: signal " << sig << ", draining" << std::endl;
+  spdlog::info("signal {}: draining", sig);
   service.SetDraining();
   server->GetHealthCheckService()->SetServingStatus(kServiceName, false);
   server->GetHealthCheckService()->SetServingStatus("", false);
   jobs.Drain();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
   pool.Shutdown();
-  std::cout << "gonogo-server: stopped" << std::endl;
+  spdlog::info("stopped");
   return 0;
 }
 
 }  // namespace
+
+// Logs go to stderr ("[time] [level] [rank N] message"); stdout carries only the banner line that
+// scripts and tests read the endpoint from.
+void SetUpLogging(const std::string& level, const std::string& who) {
+  auto logger = spdlog::stderr_color_mt("gonogo-server");
+  logger->set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%^%l%$] [" + who + "] %v");
+  logger->set_level(spdlog::level::from_str(level));
+  spdlog::set_default_logger(logger);
+}
 
 int main(int argc, char** argv) {
   const Options options = Parse(argc, argv);
@@ -176,13 +172,14 @@ int main(int argc, char** argv) {
   if (options.diagnostic_tiers) gonogo::RegisterDiagnosticTiers(tiers);
 
   if (!gonogo::server::LaunchedUnderMpi()) {
+    SetUpLogging(options.log_level, "server");
     const int threads =
         options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
     gonogo::server::ThreadPool pool(tiers, threads);
     try {
       return Serve(options, tiers, pool, signals);
     } catch (const std::exception& e) {
-      std::cerr << "gonogo-server: " << e.what() << "\n";
+      spdlog::critical("{}", e.what());
       return 1;
     }
   }
@@ -192,18 +189,19 @@ int main(int argc, char** argv) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
+  SetUpLogging(options.log_level, "rank " + std::to_string(rank));
   int rc = 0;
   if (rank > 0) {
     gonogo::server::RunMpiWorker(tiers, rank);
   } else if (provided < MPI_THREAD_SERIALIZED) {
-    std::cerr << "gonogo-server: MPI lacks MPI_THREAD_SERIALIZED\n";
+    spdlog::critical("MPI lacks MPI_THREAD_SERIALIZED");
     MPI_Abort(MPI_COMM_WORLD, 1);
   } else if (size == 1) {
     gonogo::server::ThreadPool pool(tiers, options.threads > 0 ? options.threads : 2);
     try {
       rc = Serve(options, tiers, pool, signals);
     } catch (const std::exception& e) {
-      std::cerr << "gonogo-server: " << e.what() << "\n";
+      spdlog::critical("{}", e.what());
       rc = 1;
     }
   } else {
@@ -211,7 +209,7 @@ int main(int argc, char** argv) {
     try {
       rc = Serve(options, tiers, pool, signals);
     } catch (const std::exception& e) {
-      std::cerr << "gonogo-server: " << e.what() << "\n";
+      spdlog::critical("{}", e.what());
       pool.Shutdown();  // releases the worker ranks so that MPI_Finalize can complete
       rc = 1;
     }

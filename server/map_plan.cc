@@ -42,7 +42,7 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
     auto [it, inserted] = unit_of_key.try_emplace(key, static_cast<int32_t>(plan.units.size()));
     if (inserted) {
       plan.units.push_back(
-          TerrainUnit{code, soil->name, soil->bekker, cache::ConeIndexOfBin(bin), 0});
+          TerrainUnit{code, soil->name, soil->parameters, cache::ConeIndexOfBin(bin), 0});
     }
     plan.units[it->second].cells++;
     plan.cell_unit[c] = it->second;
@@ -55,7 +55,7 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
     for (size_t a = 0; a < vehicle.axles.size(); ++a) {
       TractionRequest r;
       r.soil = SoilForTier(tier, SoilState{plan.units[u].rating_cone_index_pa,
-                                           plan.units[u].soil_name, plan.units[u].bekker});
+                                           plan.units[u].soil_name, plan.units[u].parameters});
       r.tyre = vehicle.axles[a].tyre;
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;

@@ -19,13 +19,13 @@ namespace gonogo::server {
 struct SoilClassInfo {
   std::string name;
   double remolding_index = 1.0;  // RCI = CI * RI
-  std::optional<BekkerParameters> bekker;  // explicit parameters for the bekker tier
+  std::optional<SoilParameters> parameters;  // explicit soil-model parameters
 };
 
 struct TerrainUnit {
   int32_t soil_code = -1;        // -1 when there is no soil raster
   std::string soil_name;
-  std::optional<BekkerParameters> bekker;
+  std::optional<SoilParameters> parameters;
   double rating_cone_index_pa = 0;  // quantised (cache bin)
   int64_t cells = 0;
 };

@@ -1,6 +1,7 @@
 #include "server/mpi_pool.h"
 
 #include <mpi.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
@@ -129,6 +130,10 @@ void MpiPool::CommLoop() {
           for (int r : task->ranks) wire.add_group_ranks(r);
           wire.set_group_tag(next_group_tag);
           next_group_tag = next_group_tag % 30000 + 1;  // within the guaranteed MPI_TAG_UB
+        }
+        if (wanted > 1) {
+          spdlog::debug("task {} ({}) to the rank group {}", task->entry.task.task_id,
+                        task->entry.task.tier, RanksLabel(task->ranks));
         }
         const std::string bytes = wire.SerializeAsString();
         for (int r : task->ranks) {

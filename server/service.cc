@@ -1,5 +1,6 @@
 #include "server/service.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,8 @@
 #include "server/status.h"
 #include "server/scalability.h"
 #include "solvers/common/errors.h"
+#include "solvers/common/soil_model.h"
+#include "solvers/tiers/soil_catalogue.h"
 
 namespace gonogo::server {
 
@@ -202,21 +205,26 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     Require(!request->tier().empty(), "tier", "is missing");
     const TractionTier& tier = tiers_.Get(request->tier());
     Require(request->has_tyre(), "tyre", "is missing");
-    TractionRequest r;
-    r.tyre = FromProto(request->tyre());
-    r.wheel_load_n = request->wheel_load_n();
-    r.soil = FromProto(request->soil());
-    r.slips = TractionRequest::SlipSweep(request->slip_step() == 0 ? 0.05 : request->slip_step());
-    const CurveTask task = CurveResolver::Prepare(tier, std::move(r));
-    // The pool computes a miss; this handler waits on the answer, not on the solver.
+    const CurveTask task = CurveResolver::Prepare(tier, FromProto(*request));
+    // The pool computes a miss; this handler waits on the answer, not on the solver. A tier that
+    // takes minutes is answered here only from the cache.
     ResolveOptions options;
     options.allow_similarity = !request->disable_similarity();
+    const double expected_s = tier.Needs(task.request).expected_seconds;
+    options.lookup_only = expected_s >= kLongQuerySeconds;
     options.deadline = std::chrono::steady_clock::now() +
                        std::chrono::milliseconds(limits_.curve_timeout_ms);
     options.stop = [context] { return context->IsCancelled(); };
     const Resolution answer = resolver_.Resolve(tier, {task}, options).front();
     if (answer.source == CurveSource::kCancelled) {
       return {grpc::StatusCode::DEADLINE_EXCEEDED, "the traction curve was not ready in time"};
+    }
+    if (answer.source == CurveSource::kUnresolved) {
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              "tier: the " + tier.Name() + " tier takes about " +
+                  std::to_string(static_cast<int>(expected_s)) +
+                  " s a curve and this one is not cached: submit it as a job (SubmitCurve; "
+                  "`gonogo curve` does so by itself)"};
     }
     if (!answer.ok()) return StatusFor(answer.error_kind, answer.error);
     if (!answer.curve.immobile_reason.empty()) {
@@ -227,6 +235,18 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     } else {
       FillCurve(answer.stored, false, response);
     }
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::SubmitCurve(grpc::ServerContext*,
+                                              const v1::GetTractionCurveRequest* request,
+                                              v1::Job* response) {
+  try {
+    if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+    *response = jobs_.SubmitCurve(jobs_.NewJobId(), *request);
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
@@ -292,6 +312,48 @@ grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext*, const v1::List
     info->set_ranks(static_cast<uint32_t>(needs.ranks));
     info->set_threads(static_cast<uint32_t>(needs.threads));
     info->set_expected_seconds(needs.expected_seconds);
+  }
+  return grpc::Status::OK;
+}
+
+grpc::Status MobilityServiceImpl::ListSoilModels(grpc::ServerContext*,
+                                                 const v1::ListSoilModelsRequest*,
+                                                 v1::ListSoilModelsResponse* response) {
+  for (const std::string& name : SoilModels().Names()) {
+    const SoilModelSpec& spec = *SoilModels().Find(name);
+    v1::SoilModelInfo* model = response->add_models();
+    model->set_name(spec.name);
+    model->set_description(spec.description);
+    model->set_source(spec.source);
+    for (const SoilParameterSpec& p : spec.parameters) {
+      v1::SoilParameterInfo* info = model->add_parameters();
+      info->set_name(p.name);
+      info->set_unit(p.unit);
+      info->set_min(p.min);
+      info->set_max(p.max);
+      info->set_min_open(p.min_open);
+      info->set_max_open(p.max_open);
+      info->set_has_default(p.default_value.has_value());
+      info->set_default_value(p.default_value.value_or(0));
+      info->set_description(p.description);
+    }
+  }
+  const tiers::SoilCatalogue& catalogue = tiers::BuiltinSoilCatalogue();
+  for (const std::string& soil : catalogue.Names()) {
+    v1::CatalogueSoil* entry = response->add_soils();
+    entry->set_name(soil);
+    const std::vector<std::string> models = catalogue.ModelsOf(soil);
+    for (const std::string& m : models) {
+      entry->add_models(m);
+      if (entry->source().empty()) entry->set_source(catalogue.Find(soil, m)->source);
+    }
+    for (const std::string& tier_name : tiers_.Names()) {
+      const std::vector<std::string> read = tiers_.Get(tier_name).Describe().soil_models;
+      const bool resolves = std::any_of(models.begin(), models.end(), [&](const std::string& m) {
+        return std::find(read.begin(), read.end(), m) != read.end();
+      });
+      if (resolves) entry->add_tiers(tier_name);
+    }
   }
   return grpc::Status::OK;
 }

@@ -42,12 +42,16 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                               grpc::ServerWriter<v1::ResultChunk>*) override;
   grpc::Status GetTractionCurve(grpc::ServerContext*, const v1::GetTractionCurveRequest*,
                                 v1::TractionCurve*) override;
+  grpc::Status SubmitCurve(grpc::ServerContext*, const v1::GetTractionCurveRequest*,
+                           v1::Job*) override;
   grpc::Status ListTractionCurves(grpc::ServerContext*, const v1::ListTractionCurvesRequest*,
                                   v1::ListTractionCurvesResponse*) override;
   grpc::Status RunScalability(grpc::ServerContext*, const v1::ScalabilityRequest*,
                               v1::ScalabilityReport*) override;
   grpc::Status ListTiers(grpc::ServerContext*, const v1::ListTiersRequest*,
                          v1::ListTiersResponse*) override;
+  grpc::Status ListSoilModels(grpc::ServerContext*, const v1::ListSoilModelsRequest*,
+                              v1::ListSoilModelsResponse*) override;
 
  private:
   JobManager& jobs_;

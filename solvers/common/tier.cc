@@ -8,7 +8,7 @@ SoilState SoilForTier(const TractionTier& tier, SoilState soil) {
   if (!tier.UsesConeIndex()) soil.cone_index_pa = 0;
   if (!tier.UsesSoilName()) {
     soil.soil_name.clear();
-    soil.bekker.reset();
+    soil.parameters.reset();
   }
   return soil;
 }

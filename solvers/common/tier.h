@@ -55,6 +55,9 @@ struct TierDescription {
   std::string summary;       // one line: the model
   std::string reads;         // which parts of the soil state and tyre it reads
   std::string typical_cost;  // e.g. "microseconds", "minutes on one core"
+  // Soil models (solvers/common/soil_model.h) whose parameter sets, explicit or by catalogue
+  // name, the tier reads; empty for a tier that reads only the cone index.
+  std::vector<std::string> soil_models;
 };
 
 class TractionTier {
@@ -69,7 +72,7 @@ class TractionTier {
   // Which parts of a SoilState the tier reads. What it does not read is stripped before planning
   // and keying (SoilForTier), so that it neither splits terrain units nor cache keys.
   virtual bool UsesConeIndex() const { return true; }
-  // The soil name and explicit Bekker parameters.
+  // The soil name and explicit soil-model parameters.
   virtual bool UsesSoilName() const { return false; }
   // Checks, before any work is queued, that the tier can resolve this soil (library name, explicit
   // parameters); throws InputError naming `field`. Cheap: no solver work.

@@ -45,10 +45,27 @@ void BekkerParameters::Validate(const std::string& p) const {
           p + "shear_deformation_m", "must be a positive length in m");
 }
 
+SoilParameters BekkerParameters::ToSoilModel() const {
+  return SoilParameters{"bekker",
+                        {{"n", n},
+                         {"kc", kc},
+                         {"kphi", kphi},
+                         {"cohesion_pa", cohesion_pa},
+                         {"friction_angle_deg", friction_angle_deg},
+                         {"shear_deformation_m", shear_deformation_m}}};
+}
+
+BekkerParameters BekkerParameters::FromSoilModel(const SoilParameters& p) {
+  Require(p.model == "bekker", "parameters.model", "expected bekker parameters, got " + p.model);
+  return BekkerParameters{p.Get("n"),           p.Get("kc"),
+                          p.Get("kphi"),        p.Get("cohesion_pa"),
+                          p.Get("friction_angle_deg"), p.Get("shear_deformation_m")};
+}
+
 void SoilState::Validate(const std::string& p) const {
   Require(std::isfinite(cone_index_pa), p + "cone_index_pa", "must be a finite number (got NaN or inf)");
   Require(cone_index_pa >= 0, p + "cone_index_pa", "must not be negative");
-  if (bekker) bekker->Validate(p + "bekker.");
+  if (parameters) SoilModels().Validate(*parameters, p + "parameters");
 }
 
 void TractionRequest::Validate() const {

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "solvers/common/soil_model.h"
+
 namespace gonogo {
 
 // Pneumatic tyre (or rigid wheel when deflection_m = 0). Symbols of seed 001 Table 1 in brackets.
@@ -32,14 +34,23 @@ struct BekkerParameters {
   double shear_deformation_m = 0;     // Janosi-Hanamoto shear deformation modulus K, m
 
   void Validate(const std::string& field_prefix) const;
+
+  // The "bekker" soil model's parameter set (solvers/common/soil_model.h) and back; FromSoilModel
+  // reads a set already validated by SoilModels().Validate.
+  SoilParameters ToSoilModel() const;
+  static BekkerParameters FromSoilModel(const SoilParameters& parameters);
 };
 
 // Soil state of one terrain unit. The empirical tier reads only the cone index.
 struct SoilState {
   double cone_index_pa = 0;      // cone index [CI], Pa
-  std::string soil_name;         // soil-library name, empty when only the cone index is known
-  std::optional<BekkerParameters> bekker;  // explicit parameters; override the library entry
+  std::string soil_name;         // soil-catalogue name, empty when only the cone index is known
+  // Explicit parameters of one soil model (bekker, drucker-prager, dem-hertz-mindlin, ...);
+  // override the catalogue entry.
+  std::optional<SoilParameters> parameters;
 
+  // Checks the cone index and, when given, the parameters against their model's declaration
+  // (errors name field_prefix + "parameters." + the parameter).
   void Validate(const std::string& field_prefix) const;
 };
 

@@ -6,11 +6,12 @@
 #include <utility>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::dem {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 
 // x^e for x >= 0, with fast paths for the exponents EEPA is used with (1, 1.5, 2).
 double Power(double x, double e) {

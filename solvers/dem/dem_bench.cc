@@ -17,6 +17,7 @@
 // See solvers/dem/README.md, "Benchmark".
 #include <sys/stat.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,7 +26,9 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -52,54 +55,71 @@ struct Options {
 
 constexpr int kWarmupSteps = 10;
 
-[[noreturn]] void Usage() {
-  std::fprintf(stderr,
-               "usage: gonogo-dem-bench --grains N --steps S [--threads T] [--seed K] [--trace M]\n"
-               "                        [--friction MU] [--rolling-limit ETA]\n"
-               "                        [--tangential-damping 0|1]\n"
-               "                        [--write-liggghts DIR [--trace-every M]]\n");
-  std::exit(2);
-}
+// A count of at least 1, and a finite number >= 0 (CLI11's own NonNegativeNumber takes "nan").
+const CLI::Validator kAtLeastOne =
+    CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
+const CLI::Validator kNonNegative(
+    [](std::string& text) {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || value < 0.0) {
+        return "needs a finite number >= 0, got '" + text + "'";
+      }
+      return std::string();
+    },
+    ">= 0", "NON_NEGATIVE");
 
-Options Parse(int argc, char** argv) {
-  Options options;
-  if ((argc - 1) % 2 != 0) Usage();
-  for (int a = 1; a + 1 < argc; a += 2) {
-    const std::string flag = argv[a];
-    const std::string text = argv[a + 1];
-    const int value = std::atoi(text.c_str());
-    if (flag == "--grains") {
-      options.grains = value;
-    } else if (flag == "--steps") {
-      options.steps = value;
-    } else if (flag == "--threads") {
-      options.threads = value;
-    } else if (flag == "--seed") {
-      options.seed = static_cast<unsigned>(value);
-    } else if (flag == "--trace") {
-      options.trace_every = value;
-      if (value < 1) Usage();
-    } else if (flag == "--write-liggghts") {
-      options.liggghts_dir = text;
-    } else if (flag == "--friction") {
-      options.friction = std::atof(text.c_str());
-      if (!(options.friction >= 0.0)) Usage();
-    } else if (flag == "--rolling-limit") {
-      options.rolling_limit = std::atof(text.c_str());
-      if (!(options.rolling_limit >= 0.0)) Usage();
-    } else if (flag == "--tangential-damping") {
-      if (value != 0 && value != 1) Usage();
-      options.tangential_damping = value == 1;
-    } else if (flag == "--trace-every") {
-      options.liggghts_trace_every = value;
-      if (value < 1) Usage();
-    } else {
-      std::fprintf(stderr, "unknown flag %s\n", flag.c_str());
-      Usage();
-    }
+// Returns the options, or the exit code when the program should stop here: 0 after --help, 2 on a
+// usage error (unknown or mistyped option, value out of range), with the message on stderr.
+std::optional<int> Parse(int argc, char** argv, Options* options) {
+  CLI::App app(
+      "A periodic cubic packing of N polydisperse grains with the seed 000 parameters, run for S "
+      "steps at 0.2 of the Rayleigh step; prints particle-steps per second and the peak resident "
+      "memory (figures only; not a test). See solvers/dem/README.md, \"Benchmark\".",
+      "gonogo-dem-bench");
+  app.add_option("--grains", options->grains, "grains N")
+      ->check(kAtLeastOne)
+      ->capture_default_str();
+  app.add_option("--steps", options->steps, "timed steps S")
+      ->check(kAtLeastOne)
+      ->capture_default_str();
+  app.add_option("--threads", options->threads, "OpenMP threads T")
+      ->check(kAtLeastOne)
+      ->capture_default_str();
+  app.add_option("--seed", options->seed, "random seed K of the packing")->capture_default_str();
+  app.add_option("--trace", options->trace_every,
+                 "no timing; from step 0 to S, every M steps, print kinetic energy (translational, "
+                 "rotational), contact count, and position and velocity of grains 1 and N/2 + 1 "
+                 "(LIGGGHTS ids)")
+      ->check(kAtLeastOne);
+  CLI::Option* write = app.add_option(
+      "--write-liggghts", options->liggghts_dir,
+      "write the same packing, law, box, skin and time step for LIGGGHTS 3.8 as DIR/data.bench, "
+      "DIR/in.bench (10 warm-up steps, then S timed steps: the second \"Loop time\") and "
+      "DIR/in.trace (the --trace output of LIGGGHTS), then exit");
+  app.add_option("--trace-every", options->liggghts_trace_every,
+                 "trace interval M of the DIR/in.trace written by --write-liggghts")
+      ->check(kAtLeastOne)
+      ->needs(write)
+      ->capture_default_str();
+  app.add_option("--friction", options->friction,
+                 "sliding friction coefficient MU (default: seed 000's)")
+      ->check(kNonNegative);
+  app.add_option("--rolling-limit", options->rolling_limit,
+                 "rolling resistance limit ETA (default: seed 000's; 0: no rolling resistance)")
+      ->check(kNonNegative);
+  app.add_option_function<int>(
+         "--tangential-damping",
+         [options](const int& on) { options->tangential_damping = on == 1; },
+         "1: the tangential dashpot of the seed 000 law; 0: off (LIGGGHTS `tangential_damping "
+         "off`)")
+      ->check(CLI::IsMember({0, 1}))
+      ->default_str("1");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  if (options.grains < 1 || options.steps < 1 || options.threads < 1) Usage();
-  return options;
+  return std::nullopt;
 }
 
 // Peak resident set size of this process (VmHWM), in KiB; -1 if unknown.
@@ -277,7 +297,8 @@ void PrintTraceLine(const gonogo::dem::Simulation& sim, int step) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options options = Parse(argc, argv);
+  Options options;
+  if (const std::optional<int> exit_code = Parse(argc, argv, &options)) return *exit_code;
   try {
     Setup setup = MakePacking(options);
     if (!options.liggghts_dir.empty()) {

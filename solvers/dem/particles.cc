@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::dem {
 
@@ -12,8 +13,8 @@ std::size_t Particles::Add(const Vec3& position_m_in, const Vec3& velocity_m_s_i
   Require(std::isfinite(density_kg_m3) && density_kg_m3 > 0.0, "density_kg_m3", "must be positive");
   Require(position_m_in.allFinite() && velocity_m_s_in.allFinite(), "position_m",
           "position and velocity must be finite");
-  constexpr double kPi = 3.14159265358979323846;
-  const double mass = density_kg_m3 * 4.0 / 3.0 * kPi * radius_m_in * radius_m_in * radius_m_in;
+  const double mass =
+      density_kg_m3 * 4.0 / 3.0 * units::kPi * radius_m_in * radius_m_in * radius_m_in;
   position_m.push_back(position_m_in);
   velocity_m_s.push_back(velocity_m_s_in);
   angular_velocity_rad_s.push_back(Vec3::Zero());

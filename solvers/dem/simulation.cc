@@ -6,12 +6,13 @@
 #include <utility>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/dem/byte_stream.h"
 
 namespace gonogo::dem {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 
 bool KeyLess(const NeighborPair& a, const NeighborPair& b) {
   return std::tie(a.i, a.j, a.key_shift) < std::tie(b.i, b.j, b.key_shift);

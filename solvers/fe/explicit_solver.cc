@@ -88,13 +88,14 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
 
   previous_f_.assign(ne, Eigen::Matrix3d::Identity());
   trial_f_.assign(ne, Eigen::Matrix3d::Identity());
-  states_.resize(ne);
-  for (int e = 0; e < ne; ++e) states_[e] = model_->InitialState();
+  material_points_ = model_->MakePointStore();
+  Require(material_points_ != nullptr, "fe.material", "gave no point store");
+  element_points_ = material_points_->Create(ne);
   stress_pa_.assign(ne, Eigen::Matrix3d::Zero());
   hourglass_forces_n_.assign(ne, Eigen::Matrix<double, 4, 3>::Zero());
   hourglass_modes_m_.assign(ne, Eigen::Matrix<double, 4, 3>::Zero());
   element_forces_n_.assign(ne, Mat83::Zero());
-  increments_.resize(ne);
+  increments_.assign(ne, Eigen::Matrix3d::Zero());
 
   node_element_offsets_.assign(nn + 1, 0);
   for (const auto& element : mesh_.elements) {
@@ -139,30 +140,32 @@ StepStatus ExplicitSolver::ComputeInternalForces() {
     for (int a = 0; a < 8; ++a) x[a] = positions_m_[mesh_.elements[e][a]];
     trial_f_[e] = DeformationGradient(x, references_[e].gradients_per_m);
     if (!(trial_f_[e].determinant() > 0)) inverted = true;
-    increments_[e].displacement_gradient_increment =
-        trial_f_[e] * previous_f_[e].inverse() - Eigen::Matrix3d::Identity();
-    increments_[e].committed = states_[e].get();
+    increments_[e] = trial_f_[e] * previous_f_[e].inverse() - Eigen::Matrix3d::Identity();
   }
   if (inverted) return {false, "an element turned inside out (det F <= 0): the mesh is too "
                                "distorted or the time step too large"};
 
-  // 2. The material answers for the whole mesh in one batch.
-  std::vector<material::PointResponse> responses = model_->Update(increments_, false);
+  // 2. The material answers for the whole mesh in one batch of trial states; they are committed
+  //    only when every element answered, so a failed step leaves the committed states intact and
+  //    the caller can cut the step.
+  const std::vector<material::TrialResponse> responses =
+      material_points_->TryUpdate(element_points_, increments_, false);
   for (int e = 0; e < ne; ++e) {
     if (responses[e].status != material::UpdateStatus::kOk) {
+      material_points_->Discard(element_points_);
       return {false, "element " + std::to_string(e) + ": " + responses[e].reason};
     }
   }
+  material_points_->Commit(element_points_);
 
-  // 3. Commit, and the element forces: f_a = V_0 P b_a with P = F S = J sigma F^-T, plus the
-  //    hourglass forces f_a += gamma_alpha,a (Q_alpha + c dq_alpha/dt): Q of the incremental
-  //    stiffness form, Q_{n+1} = r (Q_n + kappa (q_{n+1} - q_n)) with r of
+  // 3. The committed stresses, and the element forces: f_a = V_0 P b_a with P = F S =
+  //    J sigma F^-T, plus the hourglass forces f_a += gamma_alpha,a (Q_alpha + c dq_alpha/dt): Q of
+  //    the incremental stiffness form, Q_{n+1} = r (Q_n + kappa (q_{n+1} - q_n)) with r of
   //    RetainedDeviatoricFraction, and the viscous form on the mid-step velocities.
   const double shear_modulus_pa = moduli_.shear_pa;
 #pragma omp parallel for schedule(static) num_threads(options_.threads)
   for (int e = 0; e < ne; ++e) {
     const Eigen::Matrix3d previous_stress_pa = stress_pa_[e];
-    states_[e] = std::move(responses[e].state);
     stress_pa_[e] = responses[e].stress_pa;
     previous_f_[e] = trial_f_[e];
     const Hex8Reference& r = references_[e];
@@ -177,7 +180,7 @@ StepStatus ExplicitSolver::ComputeInternalForces() {
       }
       const Eigen::Matrix<double, 4, 3> modes = r.hourglass_vectors * displacements;
       const double retained = RetainedDeviatoricFraction(
-          previous_stress_pa, stress_pa_[e], increments_[e].displacement_gradient_increment,
+          previous_stress_pa, stress_pa_[e], increments_[e],
           shear_modulus_pa);
       hourglass_forces_n_[e] =
           retained * (hourglass_forces_n_[e] +

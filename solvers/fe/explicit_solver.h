@@ -12,10 +12,12 @@
 // of freedom (fixed and roller boundaries), and optional mass-proportional damping for the
 // quasi-static phases.
 //
-// The material never sees F: every step, each element hands the constitutive seam
-// (solvers/material/constitutive.h) its displacement-gradient increment dH = F_{n+1} F_n^-1 - I
-// on the configuration at the start of the step, in one batch for the whole mesh, so a return map,
-// a DE RVE or a network answers without the solver knowing which.
+// The material never sees F: every step, each element hands the constitutive seam its
+// displacement-gradient increment dH = F_{n+1} F_n^-1 - I on the configuration at the start of the
+// step, in one batch for the whole mesh, so a return map, a DE RVE or a network answers without
+// the solver knowing which. The solver holds only a handle per element into the model's point
+// store (solvers/material/point_store.h): it tries the batch, commits it when every element
+// answered and the step goes on, and discards it otherwise, so the states may live elsewhere.
 #pragma once
 
 #include <Eigen/Core>
@@ -23,15 +25,17 @@
 #include <string>
 #include <vector>
 
+#include "solvers/common/units.h"
 #include "solvers/fe/hex8.h"
 #include "solvers/fe/mesh.h"
 #include "solvers/material/constitutive.h"
+#include "solvers/material/point_store.h"
 
 namespace gonogo::fe {
 
 struct ExplicitOptions {
   double density_kg_m3 = 0;                  // reference density rho_0
-  Vec3 gravity_m_s2 = Vec3(0, 0, -9.81);
+  Vec3 gravity_m_s2 = Vec3(0, 0, -units::kStandardGravityMps2);
   double hourglass_coefficient = 0.05;       // epsilon_hg of the stiffness form, 0 to 0.15
   double hourglass_viscosity = 0.1;          // Q_hg of the viscous form, 0 to 0.15
   double time_step_safety = 0.5;             // fraction of the critical step StableTimeStep uses
@@ -92,7 +96,9 @@ class ExplicitSolver {
   const std::vector<double>& nodal_masses_kg() const { return nodal_masses_kg_; }
   // Cauchy stress of each element after the last step, Pa, tension positive.
   const std::vector<Eigen::Matrix3d>& element_stress_pa() const { return stress_pa_; }
-  const material::MaterialState& element_state(int element) const { return *states_[element]; }
+  // The committed material points, one per element (handle element_point(e)).
+  const material::MaterialPointStore& material_points() const { return *material_points_; }
+  material::PointHandle element_point(int element) const { return element_points_[element]; }
   Eigen::Matrix3d element_deformation_gradient(int element) const { return previous_f_[element]; }
   const Hex8Reference& element_reference(int element) const { return references_[element]; }
   double KineticEnergyJ() const;
@@ -117,11 +123,13 @@ class ExplicitSolver {
   std::vector<Eigen::Matrix<double, 4, 3>> hourglass_forces_n_;
   std::vector<Eigen::Matrix<double, 4, 3>> hourglass_modes_m_;
   std::vector<Eigen::Matrix3d> previous_f_;          // F at the last committed step
-  std::vector<std::unique_ptr<material::MaterialState>> states_;
+  // Declared after model_, so it is destroyed first (a local store refers to the model).
+  std::unique_ptr<material::MaterialPointStore> material_points_;
+  std::vector<material::PointHandle> element_points_;  // (elements) handle of each element's point
   std::vector<Eigen::Matrix3d> stress_pa_;
   std::vector<Mat83> element_forces_n_;               // (8 x 3) scratch of the element loop
   std::vector<Eigen::Matrix3d> trial_f_;              // scratch: F at x_n
-  std::vector<material::PointIncrement> increments_;  // scratch: one batch per step
+  std::vector<Eigen::Matrix3d> increments_;           // scratch: dH of each element, one batch
 
   // Node -> (element * 8 + local node) in a compressed row layout, for a deterministic gather.
   std::vector<int> node_element_offsets_;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "solvers/common/errors.h"
+#include "solvers/material/point_store.h"
 
 namespace gonogo::material {
 
@@ -26,6 +27,10 @@ ElasticModuli ConstitutiveModel::InitialElasticModuli() const {
   // Shear block with engineering shear strains: D(3,3) = D(4,4) = D(5,5) = G.
   moduli.shear_pa = tangent.diagonal().tail<3>().mean();
   return moduli;
+}
+
+std::unique_ptr<MaterialPointStore> ConstitutiveModel::MakePointStore() const {
+  return std::make_unique<LocalPointStore>(*this);
 }
 
 std::vector<PointResponse> UpdateEachPoint(

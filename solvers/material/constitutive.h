@@ -34,6 +34,8 @@ struct ElasticModuli {
   double shear_pa = 0;
 };
 
+class MaterialPointStore;  // point_store.h
+
 // What a model keeps at one integration point between increments.
 class MaterialState {
  public:
@@ -79,6 +81,11 @@ class ConstitutiveModel {
   // 3 x 3 of D) / 9, G = mean of the three shear diagonal terms D(3,3), D(4,4), D(5,5). Throws
   // std::logic_error when the model fails that update or gives no tangent.
   virtual ElasticModuli InitialElasticModuli() const;
+  // The store a solver keeps this model's points in (point_store.h): trial states it commits or
+  // discards, addressed by handle. Default: a LocalPointStore over Update, which refers to this
+  // model (so the model must outlive it). A model whose states live elsewhere (other ranks, an
+  // RVE server) returns its own store.
+  virtual std::unique_ptr<MaterialPointStore> MakePointStore() const;
 };
 
 // Helpers for implementations.

@@ -4,13 +4,13 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/material/kinematics.h"
 #include "solvers/material/linear_elastic.h"
 
 namespace gonogo::material {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 const double kSqrt2 = std::sqrt(2.0);
 const double kSqrt3 = std::sqrt(3.0);
 
@@ -27,7 +27,7 @@ struct ConeFit {
 };
 
 ConeFit FitMohrCoulomb(double angle_deg, DruckerPragerParams::Match match) {
-  const double angle = angle_deg * kPi / 180.0;
+  const double angle = units::DegreesToRadians(angle_deg);
   if (match == DruckerPragerParams::Match::kPlaneStrain) {
     // dSN eq. 6.121: eta = 3 tan(phi) / sqrt(9 + 12 tan^2 phi), xi = 3 / sqrt(9 + 12 tan^2 phi);
     // exact Mohr-Coulomb limit loads in plane strain with associated flow.

@@ -5,10 +5,10 @@
 #include <vector>
 
 #include "solvers/common/traction.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::mobility {
 
-inline constexpr double kStandardGravityMps2 = 9.80665;
 inline constexpr double kDefaultDrivelineEfficiency = 0.85;
 
 struct AxleSpec {
@@ -31,7 +31,7 @@ struct VehicleSpec {
 
   // Throws InputError naming the field ("vehicle.axles[1].tyre.width_m", ...).
   void Validate() const;
-  double WeightN() const { return mass_kg * kStandardGravityMps2; }
+  double WeightN() const { return mass_kg * units::kStandardGravityMps2; }
   // Static vertical load on one wheel of the axle, N.
   double WheelLoadN(int axle) const;
   int WheelCount() const;

@@ -6,127 +6,66 @@
 #include <stdexcept>
 
 #include "solvers/common/errors.h"
-#include "solvers/fe/explicit_solver.h"
-#include "solvers/fe/mesh.h"
-#include "solvers/material/drucker_prager.h"
-#include "solvers/rig/wheel_contact.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::rig {
 namespace {
 
-using fe::Vec3;
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kGravity = 9.81;
+using units::kPi;
 
 double Smooth(double fraction) {
   fraction = std::clamp(fraction, 0.0, 1.0);
   return 0.5 - 0.5 * std::cos(kPi * fraction);
 }
 
-// Lines from -extent (or 0) to +extent, fine within `fine_extent` of the centre.
-std::vector<double> CentredLines(double extent_m, double fine_extent_m, double h, bool mirrored) {
-  std::vector<double> half = fe::GradedLines(0, extent_m, h, fine_extent_m, 1.3, 4 * h);
-  return mirrored ? fe::MirroredLines(half) : half;
-}
-
-struct Bin {
-  std::unique_ptr<fe::ExplicitSolver> solver;
-  std::vector<int> surface;
-  std::vector<double> areas;
-  double settle_damping_per_s = 0;
-};
-
-// A soil box with the top at z = 0: quarter-symmetric (x, y >= 0) for the plates, whole for the
-// ring. Floor fixed, side walls on rollers, symmetry planes on rollers.
-Bin MakeBin(const FeSoil& soil, double extent_m, double fine_extent_m, double depth_m, double h,
-            bool whole, const RigOptions& options) {
-  std::vector<double> z_lines = fe::DepthLines(depth_m, h, fine_extent_m, 1.3, 4 * h);
-  fe::HexMesh mesh = fe::MeshBox(CentredLines(extent_m, fine_extent_m, h, whole),
-                                 CentredLines(extent_m, fine_extent_m, h, whole), z_lines);
-  auto model = std::make_shared<material::DruckerPrager>(soil.strength);
-  const material::ElasticModuli moduli = model->InitialElasticModuli();
-  const double wave_speed_m_s =
-      std::sqrt((moduli.bulk_pa + 4.0 / 3.0 * moduli.shear_pa) / soil.density_kg_m3);
-  fe::ExplicitOptions fe_options;
-  fe_options.density_kg_m3 = soil.density_kg_m3;
-  fe_options.hourglass_coefficient = options.hourglass_coefficient;
-  fe_options.hourglass_viscosity = options.hourglass_viscosity;
-  fe_options.time_step_safety = options.time_step_safety;
-  fe_options.threads = options.threads;
-  Bin bin;
-  // Quasi-static tests: the box's first vertical mode, omega_1 = pi c / (2 depth), damped
-  // critically.
-  bin.settle_damping_per_s = kPi * wave_speed_m_s / depth_m;
-  fe_options.mass_damping_per_s = bin.settle_damping_per_s;
-  bin.solver = std::make_unique<fe::ExplicitSolver>(std::move(mesh), model, fe_options);
-  fe::ExplicitSolver& s = *bin.solver;
-  const fe::HexMesh& m = s.mesh();
-  for (int n : m.NodesOnPlane(2, -depth_m)) {
-    for (int d = 0; d < 3; ++d) s.PrescribeVelocity(n, d);
-  }
-  for (int axis = 0; axis < 2; ++axis) {
-    for (int n : m.NodesOnPlane(axis, extent_m)) s.PrescribeVelocity(n, axis);
-    for (int n : m.NodesOnPlane(axis, whole ? -extent_m : 0.0)) s.PrescribeVelocity(n, axis);
-  }
-  TopSurfaceNodes(m, &bin.surface, &bin.areas);
-  return bin;
-}
-
-double StepOrThrow(fe::ExplicitSolver& solver, double dt, const RigOptions& options, int step,
+double StepOrThrow(SoilBin& bin, double dt, const RigOptions& options, int step,
                    const char* test) {
-  const fe::StepStatus status = solver.Step(dt);
+  const BinStepStatus status = bin.Step(dt);
   if (!status.ok) {
     throw std::runtime_error(std::string("virtual bevameter (") + test + "): " + status.reason);
   }
   if (step % 200 == 0 && options.cancelled && options.cancelled()) throw CancelledError();
-  return solver.time_s();
+  return bin.time_s();
 }
 
-void Settle(fe::ExplicitSolver& solver, double seconds, double dt, const RigOptions& options) {
+void Settle(SoilBin& bin, double seconds, double dt, const RigOptions& options) {
   const int steps = static_cast<int>(std::ceil(seconds / dt));
-  for (int k = 0; k < steps; ++k) StepOrThrow(solver, dt, options, k, "settling");
+  for (int k = 0; k < steps; ++k) StepOrThrow(bin, dt, options, k, "settling");
 }
 
-PlateTest RunPlate(const FeSoil& soil, double radius_m, const BevameterSpec& spec, double h,
-                   const RigOptions& options) {
-  const double extent = 3 * spec.large_plate_radius_m;
-  Bin bin = MakeBin(soil, extent, 1.3 * spec.large_plate_radius_m, extent, h, false, options);
-  fe::ExplicitSolver& s = *bin.solver;
-  const double dt = s.StableTimeStep();
+// A smooth rigid plate pushed into the soil at constant speed (after a smooth start).
+PlateTest RunPlate(const SoilBinFactory& soil_bin, double radius_m, const BevameterSpec& spec,
+                   double h, const RigOptions& options) {
+  ToolBinLayout layout;
+  layout.half_extent_m = 3 * spec.large_plate_radius_m;
+  layout.fine_extent_m = 1.3 * spec.large_plate_radius_m;
+  layout.depth_m = layout.half_extent_m;
+  layout.resolution_m = h;
+  layout.turning_tool = false;
+  const std::unique_ptr<SoilBin> bin = soil_bin.MakeToolBin(layout);
+  SoilBin& s = *bin;
+  const double dt = s.StableTimeStepS();
   Settle(s, 0.05, dt, options);
-  // The plate: surface nodes within its radius move down together (smooth rigid plate).
-  std::vector<int> plate;
-  double quarter_area = 0;
-  for (size_t k = 0; k < bin.surface.size(); ++k) {
-    const Vec3& x = s.mesh().reference_positions_m[bin.surface[k]];
-    if (std::hypot(x.x(), x.y()) <= radius_m + 1e-9) {
-      plate.push_back(bin.surface[k]);
-      quarter_area += bin.areas[k];
-    }
-  }
+  const FlatTool plate = s.AttachFlatTool(0, radius_m);
   PlateTest test;
-  test.radius_m = std::sqrt(4 * quarter_area / kPi);
+  test.radius_m = std::sqrt(plate.area_m2 / kPi);
   const double ramp_s = 0.02;
   const double duration = spec.plate_sinkage_m / spec.plate_speed_m_s + 0.5 * ramp_s;
   const int steps = static_cast<int>(std::ceil(duration / dt));
   const double start = s.time_s();
-  double sinkage = 0, previous_speed = 0;
+  double sinkage = 0;
+  FlatToolDrive drive;
+  drive.vertical = FlatToolDrive::Vertical::kSpeed;
+  drive.in_plane = FlatToolDrive::InPlane::kFree;
   for (int k = 0; k < steps; ++k) {
     const double speed = spec.plate_speed_m_s * Smooth((s.time_s() - start) / ramp_s);
-    for (int n : plate) s.PrescribeVelocity(n, 2, -speed);
+    drive.vertical_speed_m_s = speed;
+    s.DriveFlatTool(plate.id, drive);
     StepOrThrow(s, dt, options, k, "plate");
     sinkage += speed * dt;
-    // Force the plate exerts on its nodes: m a - m g + f_int (no other external force there).
-    double force_z = 0;
-    for (int n : plate) {
-      const double m = s.nodal_masses_kg()[n];
-      force_z += m * (-(speed - previous_speed) / dt) + m * kGravity + s.internal_forces_n()[n].z();
-    }
-    previous_speed = speed;
     if (k % 20 == 0 || k + 1 == steps) {
       test.sinkage_m.push_back(sinkage);
-      test.pressure_pa.push_back(-force_z / quarter_area);
+      test.pressure_pa.push_back(s.FlatToolReaction(plate.id).normal_force_n / plate.area_m2);
     }
   }
   // Fit over the sinkages past a tenth of the push (the start is the elastic response).
@@ -143,43 +82,35 @@ PlateTest RunPlate(const FeSoil& soil, double radius_m, const BevameterSpec& spe
   return test;
 }
 
-RingTest RunRing(const FeSoil& soil, double normal_pressure_pa, const BevameterSpec& spec,
-                 double h, const RigOptions& options) {
-  const double extent = 2.5 * spec.ring_outer_radius_m;
-  Bin bin = MakeBin(soil, extent, 1.2 * spec.ring_outer_radius_m, spec.ring_outer_radius_m, h,
-                    true, options);
-  fe::ExplicitSolver& s = *bin.solver;
-  const double dt = s.StableTimeStep();
+// A grousered ring pressed with a normal pressure, then turned about its axis.
+RingTest RunRing(const SoilBinFactory& soil_bin, double normal_pressure_pa,
+                 const BevameterSpec& spec, double h, const RigOptions& options) {
+  ToolBinLayout layout;
+  layout.half_extent_m = 2.5 * spec.ring_outer_radius_m;
+  layout.fine_extent_m = 1.2 * spec.ring_outer_radius_m;
+  layout.depth_m = spec.ring_outer_radius_m;
+  layout.resolution_m = h;
+  layout.turning_tool = true;
+  const std::unique_ptr<SoilBin> bin = soil_bin.MakeToolBin(layout);
+  SoilBin& s = *bin;
+  const double dt = s.StableTimeStepS();
   Settle(s, 0.05, dt, options);
-  std::vector<int> ring;
-  std::vector<double> ring_areas;
-  double area_radius = 0, area = 0;
-  for (size_t k = 0; k < bin.surface.size(); ++k) {
-    const Vec3& x = s.mesh().reference_positions_m[bin.surface[k]];
-    const double r = std::hypot(x.x(), x.y());
-    if (r >= spec.ring_inner_radius_m - 1e-9 && r <= spec.ring_outer_radius_m + 1e-9) {
-      ring.push_back(bin.surface[k]);
-      ring_areas.push_back(bin.areas[k]);
-      area += bin.areas[k];
-      area_radius += bin.areas[k] * r;
-    }
-  }
-  const double mean_radius = area_radius / area;
-  // Normal load: the pressure on every ring node's area, brought on over 0.05 s, while the ring
-  // holds the nodes against rotation.
-  auto& f_ext = s.external_forces_n();
+  const FlatTool ring = s.AttachFlatTool(spec.ring_inner_radius_m, spec.ring_outer_radius_m);
+  const double mean_radius = ring.area_moment_m3 / ring.area_m2;
+  // Normal load: the pressure brought on over 0.05 s, while the ring holds the soil against
+  // rotation.
+  FlatToolDrive drive;
+  drive.vertical = FlatToolDrive::Vertical::kPressure;
+  drive.normal_pressure_pa = normal_pressure_pa;
+  drive.in_plane = FlatToolDrive::InPlane::kHeld;
   const double load_s = 0.05;
   const int load_steps = static_cast<int>(std::ceil(load_s / dt));
   for (int k = 0; k < load_steps; ++k) {
-    for (size_t i = 0; i < ring.size(); ++i) {
-      f_ext[ring[i]] =
-          Vec3(0, 0, -normal_pressure_pa * ring_areas[i] * Smooth((k + 1.0) / load_steps));
-      s.PrescribeVelocity(ring[i], 0);
-      s.PrescribeVelocity(ring[i], 1);
-    }
+    drive.load_fraction = Smooth((k + 1.0) / load_steps);
+    s.DriveFlatTool(ring.id, drive);
     StepOrThrow(s, dt, options, k, "shear ring loading");
   }
-  s.set_mass_damping_per_s(0.2 * bin.settle_damping_per_s);
+  s.SetDampingPerS(0.2 * s.SettlingDampingPerS());
   RingTest test;
   test.normal_pressure_pa = normal_pressure_pa;
   const double ramp_s = 0.02;
@@ -188,25 +119,17 @@ RingTest RunRing(const FeSoil& soil, double normal_pressure_pa, const BevameterS
   const int steps = static_cast<int>(std::ceil(duration / dt));
   const double start = s.time_s();
   double angle = 0;
+  drive.in_plane = FlatToolDrive::InPlane::kTurning;
   for (int k = 0; k < steps; ++k) {
     const double omega = angular_speed * Smooth((s.time_s() - start) / ramp_s);
-    for (int n : ring) {
-      const Vec3& x = s.positions_m()[n];
-      s.PrescribeVelocity(n, 0, -omega * x.y());
-      s.PrescribeVelocity(n, 1, omega * x.x());
-    }
+    drive.angular_speed_rad_s = omega;
+    s.DriveFlatTool(ring.id, drive);
     StepOrThrow(s, dt, options, k, "shear ring");
     angle += omega * dt;
-    // Torque the ring applies about z: sum of x F_y - y F_x with F = f_int (quasi-static).
-    double torque = 0;
-    for (int n : ring) {
-      const Vec3& x = s.positions_m()[n];
-      const Vec3& f = s.internal_forces_n()[n];
-      torque += x.x() * f.y() - x.y() * f.x();
-    }
     if (k % 20 == 0 || k + 1 == steps) {
       test.shear_displacement_m.push_back(angle * mean_radius);
-      test.shear_stress_pa.push_back(torque / area_radius);  // uniform tau: T = tau sum(A r)
+      // Uniform tau under the ring: T = tau sum(A r).
+      test.shear_stress_pa.push_back(s.FlatToolReaction(ring.id).torque_nm / ring.area_moment_m3);
     }
   }
   test.max_shear_stress_pa =
@@ -236,7 +159,11 @@ void BevameterSpec::Validate(const std::string& p) const {
 
 BevameterResult RunVirtualBevameter(const FeSoil& soil, const BevameterSpec& spec,
                                     const RigOptions& options) {
-  soil.Validate("soil.");
+  return RunVirtualBevameter(FeClassicBins(soil, options), spec, options);
+}
+
+BevameterResult RunVirtualBevameter(const SoilBinFactory& soil_bin, const BevameterSpec& spec,
+                                    const RigOptions& options) {
   spec.Validate("bevameter.");
   options.Validate("rig.");
   const double plate_h =
@@ -248,11 +175,11 @@ BevameterResult RunVirtualBevameter(const FeSoil& soil, const BevameterSpec& spe
   const int runs = 2 + static_cast<int>(spec.ring_normal_pressures_pa.size());
   int done = 0;
   for (double radius : {spec.small_plate_radius_m, spec.large_plate_radius_m}) {
-    result.plates.push_back(RunPlate(soil, radius, spec, plate_h, options));
+    result.plates.push_back(RunPlate(soil_bin, radius, spec, plate_h, options));
     if (options.progress) options.progress(static_cast<double>(++done) / runs);
   }
   for (double sigma : spec.ring_normal_pressures_pa) {
-    result.rings.push_back(RunRing(soil, sigma, spec, ring_h, options));
+    result.rings.push_back(RunRing(soil_bin, sigma, spec, ring_h, options));
     if (options.progress) options.progress(static_cast<double>(++done) / runs);
   }
   BekkerParameters& b = result.fitted;
@@ -320,7 +247,7 @@ void FitMohrCoulomb(const std::vector<double>& normal_pa, const std::vector<doub
   Require(denominator > 0, "fit", "needs two distinct normal pressures");
   const double slope = (n * sxy - sx * sy) / denominator;
   *cohesion_pa = (sy - slope * sx) / n;
-  *friction_angle_deg = std::atan(slope) * 180 / kPi;
+  *friction_angle_deg = units::RadiansToDegrees(std::atan(slope));
 }
 
 double FitShearDeformationModulus(const std::vector<double>& j_m,

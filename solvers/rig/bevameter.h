@@ -1,4 +1,4 @@
-// The virtual bevameter of seed 000's calibration, run on the fe-classic soil: plate
+// The virtual bevameter of seed 000's calibration, run over any soil bin (soil_bin.h): plate
 // pressure-sinkage tests with two plate sizes and shear-ring tests at several normal pressures,
 // fitted to the Bekker-Janosi parameters the bekker tier reads:
 //   Bekker (1969):          p = (k_c / b + k_phi) z^n             (b: plate radius)
@@ -13,6 +13,7 @@
 
 #include "solvers/common/traction.h"
 #include "solvers/rig/fe_soils.h"
+#include "solvers/rig/soil_bin.h"
 #include "solvers/rig/wheel_rig.h"
 
 namespace gonogo::rig {
@@ -48,6 +49,12 @@ struct BevameterResult {
   BekkerParameters fitted;  // n, kc, kphi, c, phi, K
 };
 
+// Plate tests in quarter bins, ring tests in whole bins of `soil_bin`, each settled 0.05 s first.
+// options.element_size_m: the bins' resolution (0: a quarter of the small plate's radius for the
+// plates, a quarter of the ring's width for the rings); progress and cancelled as the wheel rig's.
+BevameterResult RunVirtualBevameter(const SoilBinFactory& soil_bin, const BevameterSpec& spec,
+                                    const RigOptions& options);
+// The same on the fe-classic bins of an FeSoil (FeClassicBins).
 BevameterResult RunVirtualBevameter(const FeSoil& soil, const BevameterSpec& spec,
                                     const RigOptions& options);
 void PrintBevameter(const BevameterResult& result, std::FILE* out);

@@ -1,4 +1,5 @@
-// A rigid wheel in penalty contact with Coulomb friction against the surface nodes of an FE soil.
+// A rigid wheel in penalty contact with Coulomb friction against the surface nodes of an FE soil
+// (the wheel contact of the FE soil bin, fe_soil_bin.h).
 //
 // The wheel is a cylinder of radius R and width b with its axle along y. A surface node at x inside
 // the cylinder (distance d < R from the axle in the x-z plane, |y - y_c| <= b/2) is pushed out
@@ -16,11 +17,11 @@
 #include <vector>
 
 #include "solvers/fe/explicit_solver.h"
+#include "solvers/rig/soil_bin.h"
 
 namespace gonogo::rig {
 
-using fe::Vec3;
-
+// WheelMotion and WheelLoad: soil_bin.h.
 struct WheelContactParams {
   double radius_m = 0;
   double width_m = 0;
@@ -31,19 +32,6 @@ struct WheelContactParams {
   double normal_damping_ratio = 0.2;    // c_n = 2 zeta sqrt(k_n m_node)
 
   void Validate(const std::string& field_prefix) const;
-};
-
-struct WheelMotion {
-  Vec3 centre_m = Vec3::Zero();
-  Vec3 velocity_m_s = Vec3::Zero();
-  double angular_velocity_rad_s = 0;  // about +y; > 0 rolls towards +x
-};
-
-// What the soil does to the wheel in one step.
-struct WheelLoad {
-  Vec3 force_n = Vec3::Zero();         // resultant on the wheel
-  double moment_y_nm = 0;              // about the axle, +y
-  int nodes_in_contact = 0;
 };
 
 class WheelContact {

@@ -2,21 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <stdexcept>
 
 #include "solvers/common/errors.h"
-#include "solvers/fe/explicit_solver.h"
-#include "solvers/fe/mesh.h"
-#include "solvers/material/drucker_prager.h"
-#include "solvers/rig/wheel_contact.h"
+#include "solvers/common/units.h"
+#include "solvers/rig/fe_soil_bin.h"
 
 namespace gonogo::rig {
 namespace {
 
-constexpr double kGravity = 9.81;
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 
 // Wheel kinematics and load against time: phases 1-3, then one of three endings.
 struct Schedule {
@@ -116,9 +112,8 @@ struct SampleSums {
   }
 };
 
-RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& schedule,
+RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Schedule& schedule,
                 const RigOptions& options) {
-  soil.Validate("soil.");
   wheel.Validate("wheel.");
   schedule.procedure.Validate("procedure.");
   options.Validate("rig.");
@@ -128,114 +123,65 @@ RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& sched
 
   // The soil bin: room for the whole run plus 1.5 R at either end, soil flowing sideways and a
   // pressure bulb of a few widths below the wheel.
-  fe::SoilBinSpec bin;
+  WheelBinLayout layout;
   const double start_x = 1.5 * radius;
-  bin.length_m = start_x + schedule.Travel() + 1.5 * radius;
-  bin.width_m = 2 * (0.5 * wheel.width_m + std::max(2 * wheel.width_m, 0.6 * radius));
-  bin.depth_m = std::max(3 * wheel.width_m, radius);
-  bin.element_size_m = h;
-  bin.path_half_width_m = std::min(0.5 * wheel.width_m + h, 0.5 * bin.width_m);
-  bin.fine_depth_m = std::min(std::max(wheel.width_m, 2 * h), bin.depth_m);
-  bin.half_symmetric = true;
-  fe::HexMesh mesh = fe::MeshSoilBin(bin);
-
-  auto model = std::make_shared<material::DruckerPrager>(soil.strength);
-  const material::ElasticModuli moduli = model->InitialElasticModuli();
-  const double p_wave_modulus_pa = moduli.bulk_pa + 4.0 / 3.0 * moduli.shear_pa;
-  const double wave_speed_m_s = std::sqrt(p_wave_modulus_pa / soil.density_kg_m3);
-  // Settling damps the bin's first vertical mode critically: omega_1 = pi c / (2 depth).
-  const double settle_damping_per_s = 2 * kPi * wave_speed_m_s / (2 * bin.depth_m);
-
-  fe::ExplicitOptions fe_options;
-  fe_options.density_kg_m3 = soil.density_kg_m3;
-  fe_options.hourglass_coefficient = options.hourglass_coefficient;
-  fe_options.hourglass_viscosity = options.hourglass_viscosity;
-  fe_options.time_step_safety = options.time_step_safety;
-  fe_options.mass_damping_per_s = settle_damping_per_s;
-  fe_options.threads = options.threads;
-  fe::ExplicitSolver solver(std::move(mesh), model, fe_options);
-  const fe::HexMesh& m = solver.mesh();
-
-  // Floor fixed; end walls and the far side wall on rollers; y = 0 is the symmetry plane.
-  for (int n : m.NodesOnPlane(2, -bin.depth_m)) {
-    for (int d = 0; d < 3; ++d) solver.PrescribeVelocity(n, d);
-  }
-  for (int n : m.NodesOnPlane(0, 0)) solver.PrescribeVelocity(n, 0);
-  for (int n : m.NodesOnPlane(0, bin.length_m)) solver.PrescribeVelocity(n, 0);
-  for (int n : m.NodesOnPlane(1, 0)) solver.PrescribeVelocity(n, 1);
-  for (int n : m.NodesOnPlane(1, 0.5 * bin.width_m)) solver.PrescribeVelocity(n, 1);
-
-  // Penalty stiffness of the order of the soil's own nodal stiffness, (K + 4G/3) h: sinkage error
-  // p h / (K + 4G/3) stays far below the element size, and the node's frequency at most doubles.
-  std::vector<int> surface;
-  std::vector<double> areas;
-  TopSurfaceNodes(m, &surface, &areas);
-  WheelContactParams contact;
-  contact.radius_m = radius;
-  contact.width_m = wheel.width_m;
-  contact.friction_coefficient = std::tan(soil.strength.friction_angle_deg * kPi / 180);
-  contact.adhesion_pa = soil.strength.cohesion_pa;
-  contact.normal_stiffness_n_m = p_wave_modulus_pa * h;
-  contact.tangential_stiffness_n_m = contact.normal_stiffness_n_m;
-  double lightest_surface_node_kg = std::numeric_limits<double>::infinity();
-  for (int n : surface) {
-    lightest_surface_node_kg = std::min(lightest_surface_node_kg, solver.nodal_masses_kg()[n]);
-  }
-  WheelContact wheel_contact(contact, surface, areas);
-  const double contact_step_s =
-      options.time_step_safety * 2 *
-      std::sqrt(lightest_surface_node_kg /
-                (contact.normal_stiffness_n_m + contact.tangential_stiffness_n_m +
-                 p_wave_modulus_pa * h));
-  const double dt = std::min(solver.StableTimeStep(), contact_step_s);
+  layout.length_m = start_x + schedule.Travel() + 1.5 * radius;
+  layout.width_m = 2 * (0.5 * wheel.width_m + std::max(2 * wheel.width_m, 0.6 * radius));
+  layout.depth_m = std::max(3 * wheel.width_m, radius);
+  layout.resolution_m = h;
+  layout.path_half_width_m = std::min(0.5 * wheel.width_m + h, 0.5 * layout.width_m);
+  layout.fine_depth_m = std::min(std::max(wheel.width_m, 2 * h), layout.depth_m);
+  layout.wheel_radius_m = radius;
+  layout.wheel_width_m = wheel.width_m;
+  const std::unique_ptr<SoilBin> bin = soil_bin.MakeWheelBin(layout);
+  const double dt = bin->StableTimeStepS();
 
   RigRun run;
-  run.elements = m.num_elements();
-  run.nodes = m.num_nodes();
+  const SoilBinSize size = bin->Size();
+  run.elements = size.elements;
+  run.nodes = size.nodes;
   run.element_size_m = h;
   run.time_step_s = dt;
   const int steps = static_cast<int>(std::ceil(schedule.Duration() / dt));
   run.steps = steps;
   const int sample_every = std::max(1, static_cast<int>(std::lround(0.005 / dt)));
 
-  // The hub: half the wheel's load and mass on the half model, free vertically, with numerical
-  // damping c = m / tau on its vertical speed (tau 10 ms settling, 50 ms rolling).
-  const double half_load_n = 0.5 * wheel.load_n;
-  const double half_mass_kg = half_load_n / kGravity;
+  // The hub: the wheel's load and mass, free vertically, with numerical damping c = m / tau on its
+  // vertical speed (tau 10 ms settling, 50 ms rolling).
+  const double load_n = wheel.load_n;
+  const double mass_kg = load_n / units::kStandardGravityMps2;
   double hub_z_m = radius;  // touching the undisturbed surface
   double hub_vz_m_s = 0;
   double hub_x_m = start_x;
-  // A towed wheel turns freely: (I/2) d(omega)/dt = -(torque the drive would have to supply)/2,
+  // A towed wheel turns freely: I d(omega)/dt = -(torque the drive would have to supply),
   // I = m R^2 / 2 of a solid disc of the wheel's mass W / g.
-  const double half_inertia_kg_m2 = 0.5 * half_mass_kg * radius * radius;
+  const double inertia_kg_m2 = 0.5 * mass_kg * radius * radius;
   double towed_angular_speed_rad_s = schedule.AngularSpeed();
   SampleSums sums;
   for (int step = 0; step < steps; ++step) {
-    const double t = solver.time_s();
+    const double t = bin->time_s();
     Schedule::State state = schedule.At(t);
     if (state.phase == 6) state.angular_speed_rad_s = towed_angular_speed_rad_s;
-    solver.set_mass_damping_per_s(state.phase <= 2 ? settle_damping_per_s
-                                                   : options.rolling_damping_per_s);
-    auto& f_ext = solver.external_forces_n();
-    for (int n : surface) f_ext[n].setZero();
+    bin->SetDampingPerS(state.phase <= 2 ? bin->SettlingDampingPerS()
+                                         : options.rolling_damping_per_s);
     WheelMotion motion;
     motion.centre_m = Vec3(hub_x_m, 0, hub_z_m);
     motion.velocity_m_s = Vec3(state.forward_speed_m_s, 0, hub_vz_m_s);
     motion.angular_velocity_rad_s = state.angular_speed_rad_s;
-    const WheelLoad load = wheel_contact.Apply(motion, solver, dt);
-    const fe::StepStatus status = solver.Step(dt);
+    const WheelLoad load = bin->ApplyWheel(motion, dt);
+    const BinStepStatus status = bin->Step(dt);
     if (!status.ok) {
-      throw std::runtime_error("fe-classic rig: the soil mesh failed at t = " +
+      throw std::runtime_error("rig on " + soil_bin.Describe() + ": the soil bin failed at t = " +
                                std::to_string(t) + " s (phase " + std::to_string(state.phase) +
                                "): " + status.reason);
     }
     const double tau_s = state.phase <= 2 ? 0.01 : 0.05;
-    const double hub_az = (load.force_n.z() - state.load_fraction * half_load_n) / half_mass_kg -
-                          hub_vz_m_s / tau_s;
+    const double hub_az =
+        (load.force_n.z() - state.load_fraction * load_n) / mass_kg - hub_vz_m_s / tau_s;
     hub_vz_m_s += dt * hub_az;
     hub_z_m += dt * hub_vz_m_s;
     hub_x_m += dt * state.forward_speed_m_s;
-    if (state.phase == 6) towed_angular_speed_rad_s += dt * load.moment_y_nm / half_inertia_kg_m2;
+    if (state.phase == 6) towed_angular_speed_rad_s += dt * load.moment_y_nm / inertia_kg_m2;
 
     RigSample sample;
     sample.slip = state.phase >= 3 && state.angular_speed_rad_s > 0
@@ -243,20 +189,20 @@ RigRun Simulate(const FeSoil& soil, const RigWheel& wheel, const Schedule& sched
                       : 0;
     sample.forward_speed_m_s = state.forward_speed_m_s;
     sample.angular_speed_rad_s = state.angular_speed_rad_s;
-    sample.drawbar_pull_n = 2 * load.force_n.x();
-    sample.torque_nm = -2 * load.moment_y_nm;
-    sample.vertical_force_n = 2 * load.force_n.z();
+    sample.drawbar_pull_n = load.force_n.x();
+    sample.torque_nm = -load.moment_y_nm;
+    sample.vertical_force_n = load.force_n.z();
     sample.sinkage_m = radius - hub_z_m;
     sums.Add(sample);
     if (sample.sinkage_m >= 0.9 * radius) {
-      throw CannotCarryError("wheel_load_n",
-                             "the wheel sank to its axle in the fe-classic soil (sinkage " +
-                                 std::to_string(sample.sinkage_m) + " m at slip " +
-                                 std::to_string(sample.slip) + ")");
+      throw CannotCarryError("wheel_load_n", "the wheel sank to its axle in the soil bin (" +
+                                                 soil_bin.Describe() + "; sinkage " +
+                                                 std::to_string(sample.sinkage_m) + " m at slip " +
+                                                 std::to_string(sample.slip) + ")");
     }
-    const Schedule::State next = schedule.At(solver.time_s());
+    const Schedule::State next = schedule.At(bin->time_s());
     if (sums.count == sample_every || next.phase != state.phase || step + 1 == steps) {
-      run.samples.push_back(sums.Mean(solver.time_s(), state.phase));
+      run.samples.push_back(sums.Mean(bin->time_s(), state.phase));
       sums = SampleSums();
     }
     if (step % 200 == 0) {
@@ -293,15 +239,25 @@ void RigOptions::Validate(const std::string& p) const {
   Require(threads >= 1, p + "threads", "must be at least 1");
 }
 
-RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+FeSoilBinFactory FeClassicBins(const FeSoil& soil, const RigOptions& options) {
+  soil.Validate("soil.");
+  FeBinOptions fe_options;
+  fe_options.hourglass_coefficient = options.hourglass_coefficient;
+  fe_options.hourglass_viscosity = options.hourglass_viscosity;
+  fe_options.time_step_safety = options.time_step_safety;
+  fe_options.threads = options.threads;
+  return FeSoilBinFactory(FeBinSoilFromFeSoil(soil), fe_options);
+}
+
+RigRun RunDrawbarPullTest(const SoilBinFactory& soil_bin, const RigWheel& wheel,
                           const DrawbarPullProcedure& procedure, const RigOptions& options) {
   Schedule schedule;
   schedule.procedure = procedure;
   schedule.radius_m = wheel.radius_m;
-  return Simulate(soil, wheel, schedule, options);
+  return Simulate(soil_bin, wheel, schedule, options);
 }
 
-RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
+RigRun RunTowedTest(const SoilBinFactory& soil_bin, const RigWheel& wheel, double hold_s,
                     const DrawbarPullProcedure& procedure, const RigOptions& options) {
   Require(hold_s > 0, "hold_s", "must be positive");
   Schedule schedule;
@@ -309,11 +265,12 @@ RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
   schedule.radius_m = wheel.radius_m;
   schedule.ending = Schedule::Ending::kTowed;
   schedule.hold_s = hold_s;
-  return Simulate(soil, wheel, schedule, options);
+  return Simulate(soil_bin, wheel, schedule, options);
 }
 
-RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
-                           const DrawbarPullProcedure& procedure, const RigOptions& options) {
+RigRun RunConstantSlipTest(const SoilBinFactory& soil_bin, const RigWheel& wheel, double slip,
+                           double hold_s, const DrawbarPullProcedure& procedure,
+                           const RigOptions& options) {
   Require(slip >= 0 && slip < 1, "slip", "must lie in [0, 1)");
   Require(hold_s > 0, "hold_s", "must be positive");
   Schedule schedule;
@@ -322,7 +279,23 @@ RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double sli
   schedule.ending = Schedule::Ending::kConstantSlip;
   schedule.constant_slip = slip;
   schedule.hold_s = hold_s;
-  return Simulate(soil, wheel, schedule, options);
+  return Simulate(soil_bin, wheel, schedule, options);
+}
+
+RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+                          const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  return RunDrawbarPullTest(FeClassicBins(soil, options), wheel, procedure, options);
+}
+
+RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
+                           const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  return RunConstantSlipTest(FeClassicBins(soil, options), wheel, slip, hold_s, procedure,
+                             options);
+}
+
+RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
+                    const DrawbarPullProcedure& procedure, const RigOptions& options) {
+  return RunTowedTest(FeClassicBins(soil, options), wheel, hold_s, procedure, options);
 }
 
 std::vector<TractionPoint> CurveFromRun(const RigRun& run, const std::vector<double>& slips,

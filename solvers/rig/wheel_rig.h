@@ -1,5 +1,6 @@
-// The single-wheel test rig on an FE soil bin: the drawbar-pull procedure of seed 001 section 6.3
-// and a constant-slip mode, both giving a TractionCurve.
+// The single-wheel test rig over any soil bin (soil_bin.h): the drawbar-pull procedure of seed 001
+// section 6.3, a constant-slip and a towed mode, all giving a TractionCurve. The entry points that
+// take an FeSoil build the fe-classic bin (Drucker-Prager, fe_soil_bin.h) and run the same code.
 //
 // Procedure (seed 001, section 6.3; figures for its full-scale tyre):
 //   1. gravity settle: the soil bin comes to rest under its own weight (heavily damped);
@@ -12,8 +13,8 @@
 // The seed gives omega and V_0 for its full-scale tyre only; the rig keeps omega for every wheel,
 // so the distance run, 1.5 omega R, and with it the soil bin, scale with the wheel.
 // The wheel is rigid (radius R = d / 2 of the tyre), moves on prescribed forward and angular speed,
-// and is free vertically under W. Only the half y >= 0 is meshed (symmetry plane y = 0), and forces
-// are doubled.
+// and is free vertically under W. The bin reports whole-wheel forces (the FE bin meshes the half
+// y >= 0 and doubles them).
 #pragma once
 
 #include <functional>
@@ -22,7 +23,9 @@
 
 #include "solvers/common/tier.h"
 #include "solvers/common/traction.h"
+#include "solvers/rig/fe_soil_bin.h"
 #include "solvers/rig/fe_soils.h"
+#include "solvers/rig/soil_bin.h"
 
 namespace gonogo::rig {
 
@@ -44,11 +47,13 @@ struct DrawbarPullProcedure {
 };
 
 struct RigOptions {
-  double element_size_m = 0;       // near the wheel path; 0: radius / elements_per_radius
+  double element_size_m = 0;  // bin resolution near the wheel path; 0: R / elements_per_radius
   double elements_per_radius = 6;
+  double rolling_damping_per_s = 2;  // soil bin damping once the wheel rolls, 1/s
+  // FE numerics (FeBinOptions), read only by the entry points that take an FeSoil; a
+  // SoilBinFactory carries its own.
   double hourglass_coefficient = 0.05;  // fe::ExplicitOptions
   double hourglass_viscosity = 0.1;     // fe::ExplicitOptions
-  double rolling_damping_per_s = 2;  // soil mass damping once the wheel rolls, 1/s
   double time_step_safety = 0.5;
   int threads = 1;
   // Called now and then with the fraction of simulated time done.
@@ -56,6 +61,11 @@ struct RigOptions {
   CancelCheck cancelled;  // polled every 200 steps; CancelledError once it returns true
   void Validate(const std::string& field_prefix) const;
 };
+
+// The fe-classic bins of an FeSoil (FeBinSoilFromFeSoil) with the FE numerics of `options`, as
+// the FeSoil entry points below and the virtual bevameter build them. Throws InputError naming
+// "soil.<field>".
+FeSoilBinFactory FeClassicBins(const FeSoil& soil, const RigOptions& options);
 
 // One record per output interval (every step is too many).
 struct RigSample {
@@ -79,19 +89,29 @@ struct RigRun {
   int steps = 0;
 };
 
-// Runs the procedure. Throws InputError for bad parameters, CannotCarryError when the wheel sinks
-// to its axle while settling, std::runtime_error when the mesh fails (an element turns inside
-// out), CancelledError when cancelled.
-RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+// Runs the procedure in a bin of `soil_bin`. Throws InputError for bad parameters,
+// CannotCarryError when the wheel sinks to its axle, std::runtime_error when the bin fails (an
+// element turns inside out), CancelledError when cancelled.
+RigRun RunDrawbarPullTest(const SoilBinFactory& soil_bin, const RigWheel& wheel,
                           const DrawbarPullProcedure& procedure, const RigOptions& options);
 
 // Phases 1-3, then the slip fixed at `slip` (omega held, V = (1 - s) omega R) for `hold_s`.
-RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
-                           const DrawbarPullProcedure& procedure, const RigOptions& options);
+RigRun RunConstantSlipTest(const SoilBinFactory& soil_bin, const RigWheel& wheel, double slip,
+                           double hold_s, const DrawbarPullProcedure& procedure,
+                           const RigOptions& options);
 
 // Phases 1-3, then towed for `hold_s`: the forward speed of phase 3 held and no torque on the
 // wheel, which turns as the soil makes it (free rolling). Its drawbar pull is minus the motion
 // resistance of free rolling, and its slip (negative: skid) the free-rolling slip.
+RigRun RunTowedTest(const SoilBinFactory& soil_bin, const RigWheel& wheel, double hold_s,
+                    const DrawbarPullProcedure& procedure, const RigOptions& options);
+
+// The same on the fe-classic bin of an FeSoil: Drucker-Prager of soil.strength, rim friction
+// tan(phi) and adhesion c, FE numerics from `options` (FeBinSoilFromFeSoil, FeSoilBinFactory).
+RigRun RunDrawbarPullTest(const FeSoil& soil, const RigWheel& wheel,
+                          const DrawbarPullProcedure& procedure, const RigOptions& options);
+RigRun RunConstantSlipTest(const FeSoil& soil, const RigWheel& wheel, double slip, double hold_s,
+                           const DrawbarPullProcedure& procedure, const RigOptions& options);
 RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
                     const DrawbarPullProcedure& procedure, const RigOptions& options);
 

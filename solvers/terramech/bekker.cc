@@ -7,14 +7,14 @@
 #include <string>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::terramech {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kHalfPi = 0.5 * kPi;
-constexpr double kRadiansPerDegree = kPi / 180.0;
+using units::kHalfPi;
+using units::kRadiansPerDegree;
 
 // 8-point Gauss-Legendre rule on [-1, 1]: nodes +-x_i with weights w_i (Abramowitz & Stegun 25.4).
 constexpr double kGaussNodes[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,

@@ -26,9 +26,14 @@ BekkerTier::BekkerTier(BekkerSoilLibrary library, WongReeceOptions options)
 }
 
 BekkerParameters BekkerTier::ResolveSoil(const SoilState& soil, const std::string& field) const {
-  if (soil.bekker) {
-    soil.bekker->Validate(field + ".bekker.");
-    return *soil.bekker;
+  if (soil.parameters) {
+    Require(soil.parameters->model == "bekker", field + ".parameters.model",
+            "the bekker tier reads parameters of the bekker soil model, not '" +
+                soil.parameters->model + "'");
+    const BekkerParameters b = BekkerParameters::FromSoilModel(
+        SoilModels().Validate(*soil.parameters, field + ".parameters"));
+    b.Validate(field + ".parameters.");
+    return b;
   }
   if (const BekkerSoil* entry = library_.Find(soil.soil_name)) return entry->parameters;
   throw InputError(field,
@@ -61,7 +66,8 @@ TierDescription BekkerTier::Describe() const {
           "elastic tyre",
           "soil name (bekker soil library) or explicit Bekker parameters; tyre diameter, width, "
           "inflation pressure, deflection; wheel load",
-          "about 5 ms for 100 slips"};
+          "about 5 ms for 100 slips",
+          {"bekker"}};
 }
 
 TractionCurve BekkerTier::ComputeCurve(const TractionRequest& request,

@@ -12,8 +12,8 @@
 
 namespace gonogo::tiers {
 
-// Soil: request.soil.bekker when set, else the library entry named request.soil.soil_name
-// (case-insensitive); the cone index is not read.
+// Soil: request.soil.parameters (model "bekker") when set, else the library entry named
+// request.soil.soil_name (case-insensitive); the cone index is not read.
 //
 // Mode [W08] 2.7.2, decided once per request from p_gcr = CriticalGroundPressurePa(soil, d, b, W):
 //   rigid   when tyre.inflation_pressure_pa = 0 (not given) or p_i >= p_gcr: a rigid wheel of the

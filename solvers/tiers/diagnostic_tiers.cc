@@ -17,7 +17,7 @@ class RankGroupProbeTier : public TractionTier {
   std::string Version() const override { return "diagnostic-rank-group-1"; }
   TierDescription Describe() const override {
     return {"diagnostic: runs collectively on a 2-rank group and answers with the empirical curve",
-            "cone index; tyre; wheel load", "about 2 s on 2 ranks"};
+            "cone index; tyre; wheel load", "about 2 s on 2 ranks", {}};
   }
   TierNeeds Needs(const TractionRequest&) const override {
     TierNeeds needs;
@@ -58,12 +58,41 @@ class NumericalFailureProbeTier : public TractionTier {
   std::string Name() const override { return "diagnostic-numerical-failure"; }
   std::string Version() const override { return "diagnostic-numerical-failure-1"; }
   TierDescription Describe() const override {
-    return {"diagnostic: fails as a solver that cannot converge does", "nothing", "none"};
+    return {"diagnostic: fails as a solver that cannot converge does", "nothing", "none", {}};
   }
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest&, const ComputeContext&) const override {
     throw NumericalError("diagnostic: the solver did not converge (by design of this tier)");
+  }
+};
+
+class SlowCurveProbeTier : public TractionTier {
+ public:
+  std::string Name() const override { return "diagnostic-slow-curve"; }
+  std::string Version() const override { return "diagnostic-slow-curve-1"; }
+  TierDescription Describe() const override {
+    return {"diagnostic: declares an hour a curve, takes 1.5 s, answers with the empirical curve",
+            "cone index; tyre; wheel load", "declared 1 h, really 1.5 s", {}};
+  }
+  TierNeeds Needs(const TractionRequest&) const override {
+    TierNeeds needs;
+    needs.expected_seconds = 3600;
+    return needs;
+  }
+
+ protected:
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override {
+    for (int waited = 0; waited < kSlowCurveMs; waited += 10) {
+      if (context.Cancelled()) throw CancelledError();
+      context.Report(static_cast<double>(waited) / kSlowCurveMs);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    TractionCurve curve = EmpiricalTier().Compute(request);
+    curve.tier = Name();
+    curve.tier_version = Version();
+    return curve;
   }
 };
 
@@ -73,6 +102,7 @@ class NumericalFailureProbeTier : public TractionTier {
 void RegisterDiagnosticTiers(TierRegistry& registry) {
   registry.Register(std::make_unique<tiers::RankGroupProbeTier>());
   registry.Register(std::make_unique<tiers::NumericalFailureProbeTier>());
+  registry.Register(std::make_unique<tiers::SlowCurveProbeTier>());
 }
 
 }  // namespace gonogo

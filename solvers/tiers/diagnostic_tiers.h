@@ -7,6 +7,9 @@
 //                              with the empirical tier's curve computed by the group's rank 0.
 //                              Alone (thread pool, or one worker) it does the same on one rank.
 //   diagnostic-numerical-failure  throws NumericalError, as a solver that cannot converge does.
+//   diagnostic-slow-curve      declares an hour a curve (so queries on it become jobs), takes
+//                              kSlowCurveMs, reporting progress and polling cancellation, and
+//                              answers with the empirical tier's curve.
 #pragma once
 
 #include "solvers/common/tier.h"
@@ -15,6 +18,7 @@ namespace gonogo {
 
 namespace tiers {
 inline constexpr int kGroupHoldMs = 2000;
+inline constexpr int kSlowCurveMs = 1500;
 }
 
 void RegisterDiagnosticTiers(TierRegistry& registry);

@@ -7,7 +7,8 @@ using namespace terramech;
 TierDescription EmpiricalTier::Describe() const {
   return {"Brixius (1987) WES mobility-number traction equations; NRMM soft-soil test per vehicle",
           "cone index; tyre diameter, width, section height, deflection; wheel load",
-          "microseconds"};
+          "microseconds",
+          {}};
 }
 
 TractionCurve EmpiricalTier::ComputeCurve(const TractionRequest& request,

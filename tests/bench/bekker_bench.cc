@@ -7,10 +7,10 @@
 // 0.01, ..., 1 for about SECONDS seconds on one thread and prints curves per second, the time
 // per curve and the mean time per slip point; then the same for the elastic mode (100 kPa on
 // dry sand, below its critical pressure of 171 kPa).
+#include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -41,8 +41,27 @@ TractionRequest FedAlpha(const std::string& soil, double inflation_pa) {
 
 int main(int argc, char** argv) {
   double seconds = 2.0;
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--seconds") == 0) seconds = std::atof(argv[i + 1]);
+  CLI::App app(
+      "Throughput of the bekker traction tier: for each of a few built-in soils, computes the FED "
+      "Alpha wheel on slips 0, 0.01, ..., 1 for about SECONDS seconds on one thread and prints "
+      "curves per second, the time per curve and the mean time per slip point; then the same for "
+      "the elastic mode.",
+      "gonogo-bench-bekker");
+  app.add_option("--seconds", seconds, "time spent on each soil and mode, s")
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            double value = 0;
+            if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || value <= 0) {
+              return "needs a finite number > 0, got '" + text + "'";
+            }
+            return std::string();
+          },
+          "> 0", "POSITIVE"))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
   const gonogo::tiers::BekkerTier tier;
   const std::vector<Row> rows = {

@@ -8,9 +8,10 @@
 // products, download) twice: cold cache, then warm. Then times traction-curve lookups in the SQLite
 // cache that the cold run filled. --soil-classes N replaces the sample's 3 soil classes by N
 // vertical stripes, each mapped to a soil of the Bekker library (for --tier bekker).
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
@@ -111,11 +112,30 @@ MapRun RunMap(const ServerProcess& server, const fs::path& terrain, const std::s
 int main(int argc, char** argv) {
   int size = 1000, lookups = 10000, soil_classes = 0;
   std::string tier = "empirical";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--size")) size = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--lookups")) lookups = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--tier")) tier = argv[i + 1];
-    if (!std::strcmp(argv[i], "--soil-classes")) soil_classes = std::atoi(argv[i + 1]);
+  CLI::App app(
+      "Map throughput and cache latency: makes a SIZE x SIZE sample terrain, starts gonogo-server "
+      "(embedded default) on a fresh data directory, and times the same map end to end (upload, "
+      "plan, traction tasks, cell evaluation, products, download) twice: cold cache, then warm. "
+      "Then times traction-curve lookups in the SQLite cache that the cold run filled.",
+      "gonogo-bench-map");
+  const CLI::Validator at_least_one =
+      CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
+  app.add_option("--size", size, "cells per side of the sample terrain")
+      ->check(at_least_one)
+      ->capture_default_str();
+  app.add_option("--lookups", lookups, "cache lookups timed, hits and misses each")
+      ->check(at_least_one)
+      ->capture_default_str();
+  app.add_option("--tier", tier, "traction tier of the map")->capture_default_str();
+  app.add_option("--soil-classes", soil_classes,
+                 "replace the sample's 3 soil classes by N vertical stripes, each mapped to a soil "
+                 "of the Bekker library (for --tier bekker); 0: the sample's classes")
+      ->check(CLI::Range(0, std::numeric_limits<int>::max()).description(">= 0"))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
   ScratchDir dir("bench");
   const fs::path terrain = dir.path() / "terrain";

@@ -22,10 +22,9 @@
 //     empirical D/W grows with the cone index); "none" when the bekker D/W lies outside the
 //     empirical range over that interval. Printed with the mobility number Bn at that cone index
 //     and the empirical D/W there at 10 % and 50 % slip, to compare the shapes of the two curves.
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <iterator>
 #include <optional>
 #include <string>
@@ -193,15 +192,40 @@ void PrintEquivalentConeIndices(const gonogo::terramech::BekkerSoilLibrary& libr
 
 int main(int argc, char** argv) {
   std::vector<PublishedConeIndex> published = PublishedConeIndices();
-  for (int i = 1; i < argc; ++i) {
-    const char* eq = i + 1 < argc ? std::strchr(argv[i + 1], '=') : nullptr;
-    if (std::strcmp(argv[i], "--cone-index") != 0 || eq == nullptr) {
-      std::fprintf(stderr, "usage: %s [--cone-index SOIL=PA]...\n", argv[0]);
-      return 2;
-    }
-    published.push_back({std::string(argv[i + 1], eq - argv[i + 1]), std::atof(eq + 1),
-                         "given on the command line"});
-    ++i;
+  CLI::App app(
+      "Cross-check of the two traction tiers on the same soils: bekker against empirical, on the "
+      "FED Alpha front wheel, (a) at a published cone index and (b) at the equivalent cone index "
+      "of every library soil (see the comment at the top of tests/bench/tier_crosscheck.cc).",
+      "gonogo-crosscheck-tiers");
+  app.add_option_function<std::vector<std::string>>(
+         "--cone-index",
+         [&published](const std::vector<std::string>& pairs) {
+           for (const std::string& pair : pairs) {
+             const size_t eq = pair.find('=');
+             published.push_back(
+                 {pair.substr(0, eq), std::stod(pair.substr(eq + 1)), "given on the command line"});
+           }
+         },
+         "a published cone index of a library soil for this run, Pa (repeatable); a row belongs "
+         "in PublishedConeIndices() only with its source")
+      ->type_name("SOIL=PA")
+      ->allow_extra_args(false)
+      ->check(CLI::Validator(
+          [](std::string& pair) {
+            const size_t eq = pair.find('=');
+            double pa = 0;
+            if (eq == 0 || eq == std::string::npos ||
+                !CLI::detail::lexical_cast(pair.substr(eq + 1), pa) || !std::isfinite(pa) ||
+                pa <= 0) {
+              return "needs SOIL=PA with a cone index PA > 0, got '" + pair + "'";
+            }
+            return std::string();
+          },
+          "", "SOIL=PA"));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
   const auto& library = gonogo::terramech::BekkerSoilLibrary::Builtin();
   const gonogo::tiers::BekkerTier bekker;

@@ -67,9 +67,9 @@ TEST(CurveKey, EveryInputChangesTheKey) {
   r.tyre.inflation_pressure_pa = 200e3;
   EXPECT_NE(base, CurveKey("empirical", "e1", Quantise(r))) << "inflation pressure";
   r = Request();
-  r.soil.bekker = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115};
+  r.soil.parameters = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115}.ToSoilModel();
   const std::string with_bekker = CurveKey("bekker", "b1", Quantise(r));
-  r.soil.bekker->kphi *= 1.0001;
+  r.soil.parameters->values["kphi"] *= 1.0001;
   EXPECT_NE(with_bekker, CurveKey("bekker", "b1", Quantise(r))) << "Bekker parameters";
 }
 

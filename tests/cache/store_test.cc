@@ -50,7 +50,7 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 3);
+  EXPECT_EQ(db.SchemaVersion(), 5);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
@@ -81,19 +81,19 @@ TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
   sqlite3_close(raw);
 
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 3);
+  EXPECT_EQ(db.SchemaVersion(), 5);
   CurveStore store(db);
   auto old = store.Find("old-key");
   ASSERT_TRUE(old.has_value());
   EXPECT_EQ(old->computed_unix_ms, 77);
-  EXPECT_FALSE(old->request.soil.bekker.has_value());
+  EXPECT_FALSE(old->request.soil.parameters.has_value());
   EXPECT_EQ(old->request.tyre.inflation_pressure_pa, 0.0);
 }
 
 TEST_F(StoreTest, BekkerParametersRoundTrip) {
   StoredCurve c = Curve(0, 5);
   c.request.soil.soil_name = "LETE sand";
-  c.request.soil.bekker = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115};
+  c.request.soil.parameters = BekkerParameters{0.7, 5270, 1515040, 1300, 31.1, 0.0115}.ToSoilModel();
   c.request.tyre.inflation_pressure_pa = 200000;
   c.request = Quantise(c.request);
   c.cache_key = CurveKey("bekker", "bekker-1", c.request);
@@ -101,9 +101,9 @@ TEST_F(StoreTest, BekkerParametersRoundTrip) {
   CurveStore store(db);
   ASSERT_TRUE(store.Put(c));
   auto back = store.Find(c.cache_key);
-  ASSERT_TRUE(back.has_value() && back->request.soil.bekker.has_value());
-  EXPECT_DOUBLE_EQ(back->request.soil.bekker->kphi, 1515040);
-  EXPECT_DOUBLE_EQ(back->request.soil.bekker->shear_deformation_m, 0.0115);
+  ASSERT_TRUE(back.has_value() && back->request.soil.parameters.has_value());
+  EXPECT_DOUBLE_EQ(back->request.soil.parameters->Get("kphi"), 1515040);
+  EXPECT_DOUBLE_EQ(back->request.soil.parameters->Get("shear_deformation_m"), 0.0115);
   EXPECT_DOUBLE_EQ(back->request.tyre.inflation_pressure_pa, 200000);
   EXPECT_EQ(CurveKey("bekker", "bekker-1", Quantise(back->request)), c.cache_key)
       << "a stored curve's request gives back its own key";

@@ -3,7 +3,9 @@
 // cancellation, traction-curve queries and the SIGTERM drain.
 #include <gdal.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -397,6 +399,156 @@ TEST_F(ServiceTest, TwoMapJobsProgressAtOnce) {
   EXPECT_EQ(WaitForEnd(*stub, first.job_id()).state(), v1::JOB_STATE_DONE);
   EXPECT_EQ(WaitForEnd(*stub, second.job_id()).state(), v1::JOB_STATE_DONE);
   EXPECT_EQ(slow.Terminate(), 0);
+}
+
+// A tier that takes minutes is never computed inside GetTractionCurve: the query becomes a job
+// with the solver's progress, cancellation and the curve as its products.
+TEST_F(ServiceTest, ALongCurveIsAJobWithProgressCancellationAndItsCurve) {
+  ScratchDir dir("curve-job");
+  ServerProcess server(dir.path(), {"--diagnostic-tiers"});
+  auto stub = server.Stub();
+  v1::GetTractionCurveRequest req;
+  req.set_tier("diagnostic-slow-curve");
+  *req.mutable_tyre() = FedAlpha().axles(0).tyre();
+  req.set_wheel_load_n(13438);
+  req.mutable_soil()->set_cone_index_pa(300e3);
+  {
+    grpc::ClientContext ctx;
+    v1::TractionCurve curve;
+    const grpc::Status s = stub->GetTractionCurve(&ctx, req, &curve);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+    EXPECT_NE(s.error_message().find("SubmitCurve"), std::string::npos) << s.error_message();
+  }
+  v1::Job job;
+  {
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->SubmitCurve(&ctx, req, &job).ok());
+  }
+  EXPECT_EQ(job.kind(), "curve");
+  // Watch: the solver's progress shows part-way, then DONE.
+  bool saw_progress = false;
+  v1::JobStatus last;
+  {
+    grpc::ClientContext ctx;
+    v1::WatchJobRequest watch;
+    watch.set_job_id(job.job_id());
+    auto reader = stub->WatchJob(&ctx, watch);
+    while (reader->Read(&last)) {
+      if (last.fraction_done() > 0.05 && last.fraction_done() < 0.95 &&
+          last.message().rfind("computing the traction curve", 0) == 0) {
+        saw_progress = true;
+      }
+    }
+  }
+  ASSERT_EQ(last.state(), v1::JOB_STATE_DONE) << last.message();
+  EXPECT_TRUE(saw_progress) << "the solver's progress reached the watcher";
+  v1::Job done;
+  {
+    grpc::ClientContext ctx;
+    v1::GetJobRequest get;
+    get.set_job_id(job.job_id());
+    ASSERT_TRUE(stub->GetJob(&ctx, get, &done).ok());
+  }
+  const json curve = json::parse(done.summary_json());
+  EXPECT_EQ(curve["points"].size(), 21u);
+  EXPECT_EQ(curve["provenance"]["tier"], "diagnostic-slow-curve");
+  const auto products = DownloadAll(*stub, job.job_id());
+  ASSERT_EQ(products.count("curve.csv"), 1u);
+  EXPECT_EQ(products.at("curve.csv").rfind("slip,drawbar_pull_n,torque_nm,", 0), 0u);
+  EXPECT_EQ(std::count(products.at("curve.csv").begin(), products.at("curve.csv").end(), '\n'),
+            22);
+
+  // Now cached: the RPC answers it, and a second job is done from the cache.
+  {
+    grpc::ClientContext ctx;
+    v1::TractionCurve cached;
+    ASSERT_TRUE(stub->GetTractionCurve(&ctx, req, &cached).ok());
+    EXPECT_TRUE(cached.provenance().cache_hit());
+  }
+  {
+    grpc::ClientContext ctx;
+    v1::Job again;
+    ASSERT_TRUE(stub->SubmitCurve(&ctx, req, &again).ok());
+    const v1::JobStatus end = WaitForEnd(*stub, again.job_id());
+    EXPECT_EQ(end.state(), v1::JOB_STATE_DONE);
+    EXPECT_EQ(end.cache_hits(), 1u);
+  }
+
+  // Cancelled while the solver runs.
+  req.set_wheel_load_n(9000);
+  req.set_disable_similarity(true);
+  v1::Job slow;
+  {
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->SubmitCurve(&ctx, req, &slow).ok());
+  }
+  for (int i = 0; i < 100; ++i) {
+    grpc::ClientContext ctx;
+    v1::GetJobRequest get;
+    get.set_job_id(slow.job_id());
+    v1::Job now;
+    stub->GetJob(&ctx, get, &now);
+    if (now.status().fraction_done() > 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  {
+    grpc::ClientContext ctx;
+    v1::CancelJobRequest cancel;
+    cancel.set_job_id(slow.job_id());
+    v1::Job after;
+    ASSERT_TRUE(stub->CancelJob(&ctx, cancel, &after).ok());
+  }
+  EXPECT_EQ(WaitForEnd(*stub, slow.job_id()).state(), v1::JOB_STATE_CANCELLED);
+
+  // Bad input is refused before a job exists.
+  req.set_wheel_load_n(-1);
+  {
+    grpc::ClientContext ctx;
+    v1::Job bad;
+    const grpc::Status s = stub->SubmitCurve(&ctx, req, &bad);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_EQ(s.error_message().rfind("wheel_load_n:", 0), 0u) << s.error_message();
+  }
+  {
+    grpc::ClientContext ctx;
+    v1::ListJobsRequest list;
+    v1::ListJobsResponse jobs;
+    ASSERT_TRUE(stub->ListJobs(&ctx, list, &jobs).ok());
+    EXPECT_EQ(jobs.jobs_size(), 3);
+  }
+  EXPECT_EQ(server.Terminate(), 0);
+}
+
+// The server's own options: a mistyped one is an error naming it, not silently ignored; the log
+// level is honoured and logs go to stderr, never mixed into the banner on stdout.
+TEST_F(ServiceTest, ServerOptionsAreCheckedAndLogsGoToStderr) {
+  auto run = [](const std::string& args) {
+    const std::string cmd = BinaryDir() + "/server/gonogo-server " + args + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    char buf[4096];
+    while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    const int status = pclose(p);
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, out);
+  };
+  const auto [typo_rc, typo] = run("--max-jobz 3");
+  EXPECT_NE(typo_rc, 0);
+  EXPECT_NE(typo.find("--max-jobz"), std::string::npos) << typo;
+  const auto [range_rc, range] = run("--log-level loud");
+  EXPECT_NE(range_rc, 0);
+  EXPECT_NE(range.find("--log-level"), std::string::npos) << range;
+  const auto [help_rc, help] = run("--help");
+  EXPECT_EQ(help_rc, 0);
+  EXPECT_NE(help.find("--diagnostic-tiers"), std::string::npos) << help;
+
+  ScratchDir dir("log-level");
+  ServerProcess debug(dir.path(), {"--log-level", "debug"});
+  auto stub = debug.Stub();
+  v1::Job job;
+  ASSERT_TRUE(Submit(*stub, SampleRequest(), SampleRasters(), &job).ok());
+  EXPECT_EQ(WaitForEnd(*stub, job.job_id()).state(), v1::JOB_STATE_DONE);
+  EXPECT_EQ(debug.Terminate(), 0);
+  EXPECT_EQ(debug.banner().find("[info]"), std::string::npos) << "the banner line is clean";
 }
 
 TEST_F(ServiceTest, TractionCurveIsComputedOnceThenServedFromTheCache) {

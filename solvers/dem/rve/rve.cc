@@ -7,12 +7,13 @@
 #include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/dem/byte_stream.h"
 
 namespace gonogo::dem::rve {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 constexpr char kRveTag[9] = "GNGRVE01";
 constexpr int kStiffnessRefreshSteps = 20;
 // Servo relaxation time in steps: each step closes 1/kServoSteps of the stress gap, judged with

@@ -3,10 +3,11 @@
 // RVE-steps per second for a batch of R consolidated RVEs of N grains (default 64 x 500), each
 // sheared by the same small increment through the constitutive seam (one RVE per thread, the
 // grains of an RVE on one thread), S DE steps per RVE. Prints figures only; not a test.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -14,17 +15,27 @@
 
 int main(int argc, char** argv) {
   int rves = 64, grains = 500, steps = 2000, threads = 2;
-  for (int a = 1; a + 1 < argc; a += 2) {
-    const std::string flag = argv[a];
-    const int value = std::atoi(argv[a + 1]);
-    if (flag == "--rves") rves = value;
-    else if (flag == "--grains") grains = value;
-    else if (flag == "--steps") steps = value;
-    else if (flag == "--threads") threads = value;
-    else {
-      std::fprintf(stderr, "usage: gonogo-rve-bench [--rves R] [--grains N] [--steps S] [--threads T]\n");
-      return 2;
-    }
+  CLI::App app(
+      "RVE-steps per second for a batch of R consolidated RVEs of N grains, each sheared by the "
+      "same small increment through the constitutive seam (one RVE per thread, the grains of an "
+      "RVE on one thread), S DE steps per RVE. Prints figures only; not a test.",
+      "gonogo-rve-bench");
+  const CLI::Validator at_least_one =
+      CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
+  app.add_option("--rves", rves, "RVEs R in the batch")->check(at_least_one)->capture_default_str();
+  app.add_option("--grains", grains, "grains N per RVE")
+      ->check(at_least_one)
+      ->capture_default_str();
+  app.add_option("--steps", steps, "DE steps S per RVE")
+      ->check(at_least_one)
+      ->capture_default_str();
+  app.add_option("--threads", threads, "threads T of the batch")
+      ->check(at_least_one)
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
   try {
     using namespace gonogo;

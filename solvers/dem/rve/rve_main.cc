@@ -9,17 +9,20 @@
 // at the quasi-static rate cap (inertial number 1e-3). Prints CSV on stdout, compression positive
 // (soil mechanics): strains, p, q, the six stress components, the mobilised friction angle, the
 // solid fraction and the coordination number. Progress goes to stderr.
+#include <CLI/CLI.hpp>
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/dem/rve/rve.h"
 
 namespace {
@@ -30,84 +33,89 @@ using gonogo::dem::rve::Rve;
 using gonogo::dem::rve::RveParams;
 using gonogo::dem::rve::RveSnapshot;
 
-constexpr double kPi = 3.14159265358979323846;
-
 struct Options {
   std::string path;
   RveParams rve;
-  double axial_strain = -1.0;  // < 0: the path's default
+  double axial_strain = 0;  // --axial-strain, or the path's default
   int rows = 100;
   std::string load_file;
   std::string save_file;
 };
 
-[[noreturn]] void Usage(const std::string& problem) {
-  std::fprintf(stderr,
-               "gonogo-rve: %s\n"
-               "usage: gonogo-rve isotropic|triaxial|simple-shear [--grains N] [--seed S]\n"
-               "         [--confining-pa P] [--axial-strain E] [--threads T]\n"
-               "         [--consolidation-friction MU] [--rows K] [--load FILE] [--save FILE]"
-               " [--csv]\n",
-               problem.c_str());
-  std::exit(2);
-}
-
-double ParseNumber(const std::string& flag, const char* text) {
-  char* end = nullptr;
-  const double value = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(value)) {
-    Usage(flag + " needs a number, got '" + text + "'");
-  }
-  return value;
-}
-
-Options Parse(int argc, char** argv) {
-  if (argc < 2) Usage("missing PATH");
-  Options options;
-  options.path = argv[1];
-  if (options.path != "isotropic" && options.path != "triaxial" && options.path != "simple-shear") {
-    Usage("PATH must be isotropic, triaxial or simple-shear, got '" + options.path + "'");
-  }
-  for (int a = 2; a < argc; ++a) {
-    const std::string flag = argv[a];
-    if (flag == "--csv") continue;  // CSV is the only output format
-    if (a + 1 >= argc) Usage(flag + " needs a value");
-    const char* value = argv[++a];
-    if (flag == "--grains") {
-      options.rve.grain_count = static_cast<int>(ParseNumber(flag, value));
-    } else if (flag == "--seed") {
-      options.rve.seed = static_cast<unsigned>(ParseNumber(flag, value));
-    } else if (flag == "--confining-pa") {
-      options.rve.consolidation_pressure_pa = ParseNumber(flag, value);
-    } else if (flag == "--axial-strain") {
-      options.axial_strain = ParseNumber(flag, value);
-      // Simple shear (gamma_xz) may go far: the engine reduces the sheared cell as it goes.
-      const double largest = options.path == "simple-shear" ? 5.0 : 0.5;
-      if (options.axial_strain <= 0.0 || options.axial_strain > largest) {
-        Usage(options.path == "simple-shear" ? "--axial-strain (gamma_xz) must be in (0, 5]"
-                                             : "--axial-strain must be in (0, 0.5]");
+// The numbers the RVE reads must be finite (CLI11 alone takes "nan" and "inf").
+const CLI::Validator kFinite(
+    [](std::string& text) {
+      double value = 0;
+      if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value)) {
+        return "needs a finite number, got '" + text + "'";
       }
-    } else if (flag == "--threads") {
-      options.rve.threads = static_cast<int>(ParseNumber(flag, value));
-    } else if (flag == "--consolidation-friction") {
-      options.rve.consolidation_friction = ParseNumber(flag, value);
-    } else if (flag == "--rows") {
-      options.rows = static_cast<int>(ParseNumber(flag, value));
-      if (options.rows < 1) Usage("--rows must be >= 1");
-    } else if (flag == "--load") {
-      options.load_file = value;
-    } else if (flag == "--save") {
-      options.save_file = value;
-    } else {
-      Usage("unknown flag " + flag);
+      return std::string();
+    },
+    "", "FINITE");
+
+// Fills `options`, or returns the exit code when the program should stop here: 0 after --help, 2
+// on a usage error (unknown or mistyped option, value out of range), with the message on stderr.
+std::optional<int> Parse(int argc, char** argv, Options* options) {
+  CLI::App app(
+      "Laboratory stress paths on one periodic DE RVE with the seed 000 parameters: the RVE is "
+      "generated and isotropically consolidated to the confining pressure (or loaded from --load), "
+      "then\n"
+      "  isotropic     all three normal strains compressed equally, to axial strain E "
+      "(default 0.01)\n"
+      "  triaxial      drained: axial strain compressed to E (default 0.2), lateral stresses held "
+      "at P\n"
+      "  simple-shear  shear strain gamma_xz to E (default 0.3), no lateral strain, sigma_zz held "
+      "at P\n"
+      "at the quasi-static rate cap (inertial number 1e-3). Prints CSV on stdout, compression "
+      "positive (soil mechanics): strains, p, q, the six stress components, the mobilised friction "
+      "angle, the solid fraction and the coordination number. Progress goes to stderr.",
+      "gonogo-rve");
+  // PATH is checked for presence after parsing, so that an unknown option is reported by name
+  // rather than as a missing PATH.
+  CLI::Option* path = app.add_option("PATH", options->path, "isotropic, triaxial or simple-shear")
+                          ->check(CLI::IsMember({"isotropic", "triaxial", "simple-shear"}));
+  app.add_option("--grains", options->rve.grain_count, "grains N of the RVE")
+      ->capture_default_str();
+  app.add_option("--seed", options->rve.seed, "random seed S of the placement")
+      ->capture_default_str();
+  app.add_option("--confining-pa", options->rve.consolidation_pressure_pa,
+                 "confining pressure P, Pa (consolidation, and lateral or sigma_zz target)")
+      ->check(kFinite)
+      ->capture_default_str();
+  CLI::Option* axial_strain =
+      app.add_option("--axial-strain", options->axial_strain,
+                     "final axial strain E in (0, 0.5], or gamma_xz in (0, 5] for simple-shear "
+                     "(default: the path's)")
+          ->check(kFinite);
+  app.add_option("--threads", options->rve.threads, "threads T")->capture_default_str();
+  app.add_option("--consolidation-friction", options->rve.consolidation_friction,
+                 "grain friction MU while the RVE is consolidated")
+      ->check(kFinite)
+      ->capture_default_str();
+  app.add_option("--rows", options->rows, "CSV rows K after the initial one")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1"))
+      ->capture_default_str();
+  app.add_option("--load", options->load_file,
+                 "restore the RVE from FILE instead of generating it");
+  app.add_option("--save", options->save_file, "save the final RVE to FILE");
+  app.add_flag("--csv", "accepted and ignored: CSV is the only output format");
+  try {
+    app.parse(argc, argv);
+    if (path->count() == 0) throw CLI::RequiredError("PATH");
+    // Simple shear (gamma_xz) may go far: the engine reduces the sheared cell as it goes.
+    const bool shear = options->path == "simple-shear";
+    if (axial_strain->count() == 0) {
+      options->axial_strain = options->path == "isotropic"  ? 0.01
+                              : options->path == "triaxial" ? 0.2
+                                                            : 0.3;
+    } else if (options->axial_strain <= 0.0 || options->axial_strain > (shear ? 5.0 : 0.5)) {
+      throw CLI::ValidationError("--axial-strain",
+                                 shear ? "gamma_xz must be in (0, 5]" : "must be in (0, 0.5]");
     }
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  if (options.axial_strain < 0.0) {
-    options.axial_strain = options.path == "isotropic" ? 0.01
-                           : options.path == "triaxial" ? 0.2
-                                                        : 0.3;
-  }
-  return options;
+  return std::nullopt;
 }
 
 void PrintHeader() {
@@ -128,12 +136,14 @@ void PrintRow(long step, const RveSnapshot& snapshot) {
   const double major = principal[2], minor = principal[0];
   // Mohr-Coulomb mobilised friction: sin(phi) = (s1 - s3) / (s1 + s3), cohesionless.
   const double friction_deg =
-      major + minor > 0.0 ? std::asin((major - minor) / (major + minor)) * 180.0 / kPi : 0.0;
-  std::printf("%ld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.5f,%.4f,%.3e\n",
-              step, snapshot.time_s, strain(2, 2), strain.trace(), -2.0 * strain(0, 2), p, q,
-              stress(0, 0), stress(1, 1), stress(2, 2), stress(1, 2), stress(0, 2), stress(0, 1),
-              friction_deg, snapshot.solid_fraction, snapshot.coordination_number,
-              snapshot.unbalanced_force_ratio);
+      major + minor > 0.0
+          ? gonogo::units::RadiansToDegrees(std::asin((major - minor) / (major + minor)))
+          : 0.0;
+  std::printf(
+      "%ld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.5f,%.4f,%.3e\n", step,
+      snapshot.time_s, strain(2, 2), strain.trace(), -2.0 * strain(0, 2), p, q, stress(0, 0),
+      stress(1, 1), stress(2, 2), stress(1, 2), stress(0, 2), stress(0, 1), friction_deg,
+      snapshot.solid_fraction, snapshot.coordination_number, snapshot.unbalanced_force_ratio);
 }
 
 std::string ReadFile(const std::string& path) {
@@ -145,7 +155,8 @@ std::string ReadFile(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options options = Parse(argc, argv);
+  Options options;
+  if (const std::optional<int> exit_code = Parse(argc, argv, &options)) return *exit_code;
   try {
     Rve rve = options.load_file.empty()
                   ? Rve::Generate(options.rve,

@@ -2,10 +2,11 @@
 //   geo_bench [N ...]
 // Inputs: cone index and elevation on the output grid (UTM 17N, 10 m cells) and a soil-class
 // raster in EPSG:4326, so both the same-grid path and a reprojecting warp are timed.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -57,7 +58,18 @@ gonogo::geo::TerrainInputs MakeInputs(int n) {
 
 int main(int argc, char** argv) {
   std::vector<int> sizes;
-  for (int i = 1; i < argc; ++i) sizes.push_back(std::atoi(argv[i]));
+  CLI::App app(
+      "Prints how long LoadTerrain and WriteMapProducts take on N x N grids: cone index and "
+      "elevation on the output grid (UTM 17N, 10 m cells) and a soil-class raster in EPSG:4326, so "
+      "both the same-grid path and a reprojecting warp are timed.",
+      "geo_bench");
+  app.add_option("N", sizes, "grid sizes, cells per side (default 1000)")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1"));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
   if (sizes.empty()) sizes.push_back(1000);
   gonogo::geo::fixtures::TempDir dir("geo_bench");
   std::printf("%8s %12s %12s %14s\n", "N", "load_s", "write_s", "products_MB");

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "solvers/common/units.h"
 #include "solvers/dem/simulation.h"
 
 namespace gonogo::dem {
@@ -59,10 +60,9 @@ struct Analytic {
 // Johnson (1985), Contact Mechanics, ch. 11: d_max = (15 m* v^2 / (16 E* sqrt(r_e)))^(2/5),
 // t_c = 2.87 (m*^2 / (r_e E*^2 v))^(1/5), F_max = 4/3 E* sqrt(r_e) d_max^(3/2).
 Analytic Johnson(const MaterialParams& material, double speed_m_s) {
-  constexpr double kPi = 3.14159265358979323846;
   const double r1 = 1.0e-3, r2 = 0.8e-3;
-  const double m1 = material.density_kg_m3 * 4.0 / 3.0 * kPi * r1 * r1 * r1;
-  const double m2 = material.density_kg_m3 * 4.0 / 3.0 * kPi * r2 * r2 * r2;
+  const double m1 = material.density_kg_m3 * 4.0 / 3.0 * units::kPi * r1 * r1 * r1;
+  const double m2 = material.density_kg_m3 * 4.0 / 3.0 * units::kPi * r2 * r2 * r2;
   const double m_eff = m1 * m2 / (m1 + m2), r_e = r1 * r2 / (r1 + r2);
   const double e_star = material.EffectiveModulusPa();
   const double d_max =

@@ -8,11 +8,12 @@
 #include <random>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::dem {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 
 MaterialParams Seed000() {
   MaterialParams m;  // defaults are seed 000: E 1.5 GPa, nu 0.293, mu 0.452, beta 2.25, eta 0.99

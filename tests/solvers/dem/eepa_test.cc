@@ -14,13 +14,14 @@
 #include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/dem/contact_model.h"
 #include "solvers/dem/simulation.h"
 
 namespace gonogo::dem {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 constexpr double kRadiusM = 5e-3;             // 10 mm grains of seed 001
 constexpr double kEffectiveRadiusM = 2.5e-3;  // r_e of two of them
 constexpr double kMaxOverlapM = 1e-4;         // 4 % of r_e

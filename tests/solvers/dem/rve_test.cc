@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/dem/rve/rve_material.h"
 
 namespace gonogo::dem::rve {
@@ -186,7 +187,7 @@ TEST_F(RveTest, SimpleShearHoldsTheNormalStressAndMobilisesFriction) {
   // tan 60 deg (the triaxial test checks the friction angle against published ranges).
   const double ratio = s.stress_pa(0, 2) / -s.stress_pa(2, 2);
   EXPECT_GT(ratio, 0.3);
-  EXPECT_LT(ratio, std::tan(60.0 * 3.14159265358979 / 180.0));
+  EXPECT_LT(ratio, std::tan(units::DegreesToRadians(60.0)));
 }
 
 TEST_F(RveTest, ConstitutiveSeamLeavesCommittedStatesAndFailsCleanly) {

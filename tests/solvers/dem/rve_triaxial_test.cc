@@ -12,18 +12,18 @@
 #include <cmath>
 #include <cstdio>
 
+#include "solvers/common/units.h"
 #include "solvers/dem/rve/rve.h"
 
 namespace gonogo::dem::rve {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kConfiningPa = 100e3;
 
 double MobilisedFrictionDeg(const Matrix3& stress_pa) {
   // Compression positive principal stresses; sin(phi) = (s1 - s3) / (s1 + s3).
   const Eigen::Vector3d s = Eigen::SelfAdjointEigenSolver<Matrix3>(-stress_pa).eigenvalues();
-  return std::asin((s[2] - s[0]) / (s[2] + s[0])) * 180.0 / kPi;
+  return units::RadiansToDegrees(std::asin((s[2] - s[0]) / (s[2] + s[0])));
 }
 
 struct TriaxialResult {

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::dem {
 namespace {
@@ -95,14 +96,14 @@ TEST(Simulation, SphereSettlesOnAFloorAtTheHertzStaticOverlap) {
   params.box.lo_m = Vec3::Constant(-0.01);
   params.box.hi_m = Vec3::Constant(0.01);
   params.walls.push_back(Wall{Vec3::Zero(), Vec3::UnitZ()});
-  params.gravity_m_s2 = Vec3(0.0, 0.0, -9.81);
+  params.gravity_m_s2 = Vec3(0.0, 0.0, -units::kStandardGravityMps2);
   const double radius_m = 0.87e-3;
   Particles grains;
   grains.Add(Vec3(0, 0, radius_m * 1.01), Vec3::Zero(), radius_m, 2650.0);
   Simulation sim(params, grains);
   sim.Run(static_cast<int>(0.1 / sim.time_step_s()));
   // m g = 4/3 E* sqrt(r) d^{3/2} for a sphere on a rigid plane with the pair E*.
-  const double weight_n = grains.mass_kg[0] * 9.81;
+  const double weight_n = grains.mass_kg[0] * units::kStandardGravityMps2;
   const double expected_m =
       std::pow(3.0 * weight_n / (4.0 * params.material.EffectiveModulusPa() * std::sqrt(radius_m)),
                2.0 / 3.0);
@@ -165,7 +166,7 @@ TEST(Simulation, RayleighStepAndValidation) {
   // pi r sqrt(rho / G) / (0.1631 nu + 0.8766) for the seed 000 grain.
   const double shear_pa = 1.5e9 / (2.0 * 1.293);
   const double expected_s =
-      3.14159265358979 * 0.87e-3 * std::sqrt(2650.0 / shear_pa) / (0.1631 * 0.293 + 0.8766);
+      units::kPi * 0.87e-3 * std::sqrt(2650.0 / shear_pa) / (0.1631 * 0.293 + 0.8766);
   EXPECT_NEAR(RayleighTimeStepS(0.87e-3, material) / expected_s, 1.0, 1e-12);
   SimulationParams params;
   Particles grains;

@@ -1,13 +1,17 @@
 // The explicit total-Lagrangian solver against closed forms: patch test, P-wave speed, a soil
-// column under its own weight, and the bookkeeping (determinism, failure leaves the state intact).
+// column under its own weight, and the bookkeeping (determinism, failure leaves the state intact,
+// also when the material refuses an update).
 #include "solvers/fe/explicit_solver.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/fe/mesh.h"
 #include "solvers/material/drucker_prager.h"
 #include "solvers/material/linear_elastic.h"
@@ -109,9 +113,9 @@ TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
   for (int k = 0; k <= layers; ++k) z[k] = -depth + depth * k / layers;
   HexMesh mesh = MeshBox(Lines(1, 0.25), Lines(1, 0.25), z);
   ExplicitOptions options = Options();
-  options.gravity_m_s2 = Vec3(0, 0, -9.81);
+  options.gravity_m_s2 = Vec3(0, 0, -units::kStandardGravityMps2);
   const double c = std::sqrt(PWaveModulus() / kDensity);
-  options.mass_damping_per_s = 3.14159 * c / depth;  // critical for the first mode
+  options.mass_damping_per_s = units::kPi * c / depth;  // critical for the first mode
   ExplicitSolver solver(mesh, Elastic(), options);
   const HexMesh& m = solver.mesh();
   for (int n = 0; n < m.num_nodes(); ++n) {
@@ -122,7 +126,7 @@ TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
   const double dt = solver.StableTimeStep();
   while (solver.time_s() < 40 * depth / c) ASSERT_TRUE(solver.Step(dt).ok);
 
-  const double g = 9.81;
+  const double g = units::kStandardGravityMps2;
   const double settlement = kDensity * g * depth * depth / (2 * PWaveModulus());
   const double top_z = solver.positions_m()[m.GridNode(0, 0, layers)].z();
   EXPECT_NEAR(-top_z, settlement, 0.01 * settlement);
@@ -153,7 +157,7 @@ TEST(ExplicitSolverTest, DruckerPragerTriaxialThroughTheElement) {
   const double c = std::sqrt((model->InitialElasticModuli().bulk_pa +
                               4.0 / 3 * model->InitialElasticModuli().shear_pa) /
                              kDensity);
-  options.mass_damping_per_s = 3.14159 * c / side;
+  options.mass_damping_per_s = units::kPi * c / side;
   ExplicitSolver solver(mesh, model, options);
   const HexMesh& m = solver.mesh();
   // Symmetry rollers on x = 0, y = 0, z = 0; confining forces on x = side and y = side.
@@ -191,7 +195,7 @@ TEST(ExplicitSolverTest, DruckerPragerTriaxialThroughTheElement) {
     ASSERT_TRUE(solver.Step(dt).ok);
   }
   const Eigen::Matrix3d s = solver.element_stress_pa()[0];
-  const double phi = p.friction_angle_deg * 3.14159265358979 / 180;
+  const double phi = units::DegreesToRadians(p.friction_angle_deg);
   const double q_expected = 2 * (p.cohesion_pa * std::cos(phi) + sigma3 * std::sin(phi)) /
                             (1 - std::sin(phi));
   EXPECT_NEAR(-s(0, 0), sigma3, 0.02 * sigma3);
@@ -205,7 +209,7 @@ TEST(ExplicitSolverTest, ThreadCountDoesNotChangeTheBits) {
     material::DruckerPragerParams p{10e6, 0.3, 2e3, 30, 5};
     ExplicitOptions o = Options(5);
     o.threads = threads;
-    o.gravity_m_s2 = Vec3(0, 0, -9.81);
+    o.gravity_m_s2 = Vec3(0, 0, -units::kStandardGravityMps2);
     ExplicitSolver solver(mesh, std::make_shared<material::DruckerPrager>(p), o);
     for (int n : solver.mesh().NodesOnPlane(2, 0)) {
       for (int d = 0; d < 3; ++d) solver.PrescribeVelocity(n, d);
@@ -232,6 +236,79 @@ TEST(ExplicitSolverTest, AnInvertedElementFailsTheStepAndChangesNothing) {
   EXPECT_NE(status.reason.find("inside out"), std::string::npos) << status.reason;
   EXPECT_EQ(solver.positions_m(), before);
   EXPECT_EQ(solver.time_s(), t);
+}
+
+// Linear elastic whose update of element 0 fails while `refuse` is set: a material failure (the
+// kind an RVE or a return map may report) that the solver must survive.
+class RefusingMaterial : public material::ConstitutiveModel {
+ public:
+  std::string Name() const override { return "refusing-linear-elastic"; }
+  std::unique_ptr<material::MaterialState> InitialState() const override {
+    return inner_.InitialState();
+  }
+  std::unique_ptr<material::MaterialState> RestoreState(const std::string& bytes) const override {
+    return inner_.RestoreState(bytes);
+  }
+  std::vector<material::PointResponse> Update(
+      const std::vector<material::PointIncrement>& increments, bool want_tangent) const override {
+    std::vector<material::PointResponse> responses = inner_.Update(increments, want_tangent);
+    if (refuse && !responses.empty()) {
+      responses[0] = material::PointResponse();
+      responses[0].reason = "refused";
+    }
+    return responses;
+  }
+  bool refuse = false;
+
+ private:
+  material::LinearElastic inner_{material::LinearElasticParams{kYoung, kPoisson}};
+};
+
+// A failed material update discards the step's trial states: the committed states, positions and
+// time stay, and retrying the step gives the bits of a run that never failed.
+TEST(ExplicitSolverTest, AFailedMaterialUpdateDiscardsTheTrialStates) {
+  auto make = [](std::shared_ptr<const material::ConstitutiveModel> model) {
+    auto solver = std::make_unique<ExplicitSolver>(
+        MeshBox(Lines(2, 0.2), Lines(1, 0.1), Lines(1, 0.1)), std::move(model), Options(5));
+    for (int n : solver->mesh().NodesOnPlane(2, 0)) {
+      for (int d = 0; d < 3; ++d) solver->PrescribeVelocity(n, d);
+    }
+    for (int n : solver->mesh().NodesOnPlane(2, 0.1)) solver->PrescribeVelocity(n, 2, -0.01);
+    return solver;
+  };
+  auto refusing = std::make_shared<RefusingMaterial>();
+  auto solver = make(refusing);
+  auto reference = make(std::make_shared<material::LinearElastic>(
+      material::LinearElasticParams{kYoung, kPoisson}));
+  const double dt = solver->StableTimeStep();
+  for (int k = 0; k < 5; ++k) {
+    ASSERT_TRUE(solver->Step(dt).ok);
+    ASSERT_TRUE(reference->Step(dt).ok);
+  }
+  const material::MaterialPointStore& points = solver->material_points();
+  std::vector<std::string> committed;
+  for (int e = 0; e < solver->mesh().num_elements(); ++e) {
+    committed.push_back(points.Serialize(solver->element_point(e)));
+  }
+  const std::vector<Vec3> positions = solver->positions_m();
+  refusing->refuse = true;
+  const StepStatus status = solver->Step(dt);
+  EXPECT_FALSE(status.ok);
+  EXPECT_NE(status.reason.find("refused"), std::string::npos) << status.reason;
+  for (int e = 0; e < solver->mesh().num_elements(); ++e) {
+    EXPECT_EQ(points.Serialize(solver->element_point(e)), committed[e]) << e;  // element 1 too
+  }
+  EXPECT_EQ(solver->positions_m(), positions);
+  refusing->refuse = false;
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(solver->Step(dt).ok);
+    ASSERT_TRUE(reference->Step(dt).ok);
+  }
+  EXPECT_EQ(solver->positions_m(), reference->positions_m());
+  for (int e = 0; e < solver->mesh().num_elements(); ++e) {
+    EXPECT_EQ(points.Serialize(solver->element_point(e)),
+              reference->material_points().Serialize(reference->element_point(e)));
+  }
 }
 
 // Hourglass control, incremental stiffness form: its scale factor r against closed forms, and

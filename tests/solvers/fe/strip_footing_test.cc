@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 
+#include "solvers/common/units.h"
 #include "solvers/fe/explicit_solver.h"
 #include "solvers/fe/mesh.h"
 #include "solvers/material/drucker_prager.h"
@@ -14,7 +15,7 @@
 namespace gonogo::fe {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using units::kPi;
 
 // Footing pressure at a settlement of `settlement_fraction` x B.
 double FootingPressure(double element_size_m, double settlement_fraction,

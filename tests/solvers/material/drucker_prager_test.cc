@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/material/kinematics.h"
 #include "solvers/material/linear_elastic.h"
 #include "solvers/material/registry.h"
@@ -19,7 +20,6 @@
 namespace gonogo::material {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kYoungPa = 20e6;
 constexpr double kPoisson = 0.3;
 
@@ -121,7 +121,7 @@ TEST(DruckerPragerTest, MatchingCoefficients) {
 // (compression positive), held while the strain grows, with the dilatancy of the flow rule:
 // d eps_v / d eps_a = eta_bar / (eta_bar / 3 - 1 / sqrt 3) once the stress is stationary.
 TEST(DruckerPragerTest, DrainedTriaxialReachesMohrCoulomb) {
-  const double cohesion = 10e3, phi = 30 * kPi / 180, sigma3 = 100e3;
+  const double cohesion = 10e3, phi = units::DegreesToRadians(30), sigma3 = 100e3;
   const DruckerPrager model(Soil(cohesion, 30, 10));
   MixedControlPoint point(model);
   point.Step(Vector6::Zero(), kAllNormalStresses, Isotropic(-sigma3));
@@ -245,7 +245,7 @@ TEST(DruckerPragerTest, PlaneStrainMatchGivesMohrCoulombInPlaneStrain) {
     EXPECT_LT(point.stress_pa().head<5>().norm(), 1e-9 * limits[m]);
   }
 
-  const double phi = 30 * kPi / 180, mean = -100e3;
+  const double phi = units::DegreesToRadians(30), mean = -100e3;
   const DruckerPrager model(Soil(cohesion, 30, 30, DruckerPragerParams::Match::kPlaneStrain));
   MixedControlPoint point(model);
   point.Step(Vector6::Zero(), kAllNormalStresses, Isotropic(mean));

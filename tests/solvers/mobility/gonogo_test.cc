@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 #include "solvers/mobility/soft_soil.h"
 #include "solvers/mobility/vehicle.h"
 
@@ -14,7 +15,7 @@ namespace {
 VehicleSpec TwoAxle() {
   VehicleSpec v;
   v.name = "test";
-  v.mass_kg = 1000.0 / kStandardGravityMps2 * 4;  // weight exactly 4000 N
+  v.mass_kg = 1000.0 / units::kStandardGravityMps2 * 4;  // weight exactly 4000 N
   const TyreGeometry tyre{1.0, 0.3, 0.2, 0.03, 0.47};
   v.axles = {{0.5, 2, tyre, true}, {0.5, 2, tyre, true}};
   v.drive_power_w = 10000;

@@ -94,8 +94,9 @@ TEST(BekkerSimilarity, FrictionalSoilIsSelfSimilarUnderItsOwnLawNotUnderEqualPre
   const BekkerParameters full_soil{n, 0.0, 1.5e6, 0.0, 32.0, 0.02};
   auto request = [&](double k, double load_exponent) {
     TractionRequest r;
-    r.soil.bekker = full_soil;
-    r.soil.bekker->shear_deformation_m *= k;
+    BekkerParameters soil = full_soil;
+    soil.shear_deformation_m *= k;
+    r.soil.parameters = soil.ToSoilModel();
     r.tyre = TyreGeometry{1.0 * k, 0.3 * k, 0.25 * k, 0.0, 0.0};  // rigid wheel
     r.wheel_load_n = 6000.0 * std::pow(k, load_exponent);
     r.slips = TractionRequest::SlipSweep(0.1);

@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "solvers/common/units.h"
 #include "solvers/rig/fe_soils.h"
 
 namespace gonogo::rig {
@@ -28,11 +29,11 @@ TEST(BevameterFitTest, RecoversBekkerAndJanosiParametersFromSyntheticTests) {
   EXPECT_NEAR(fitted_kphi, kphi, 1e-6 * kphi);
 
   double c = 0, phi = 0;
-  FitMohrCoulomb(
-      {10e3, 20e3, 40e3},
-      {1300 + 10e3 * std::tan(31.1 * M_PI / 180), 1300 + 20e3 * std::tan(31.1 * M_PI / 180),
-       1300 + 40e3 * std::tan(31.1 * M_PI / 180)},
-      &c, &phi);
+  FitMohrCoulomb({10e3, 20e3, 40e3},
+                 {1300 + 10e3 * std::tan(units::DegreesToRadians(31.1)),
+                  1300 + 20e3 * std::tan(units::DegreesToRadians(31.1)),
+                  1300 + 40e3 * std::tan(units::DegreesToRadians(31.1))},
+                 &c, &phi);
   EXPECT_NEAR(c, 1300, 1e-6);
   EXPECT_NEAR(phi, 31.1, 1e-9);
 
@@ -62,7 +63,7 @@ TEST(VirtualBevameterTest, FittedStrengthMatchesTheSoil) {
   PrintBevameter(r, stdout);
   const BekkerParameters& b = r.fitted;
   const double c = soil.strength.cohesion_pa;
-  const double phi = soil.strength.friction_angle_deg * M_PI / 180;
+  const double phi = units::DegreesToRadians(soil.strength.friction_angle_deg);
   const double band_m = 0.25 * (spec.ring_outer_radius_m - spec.ring_inner_radius_m);
   const double side_share =
       3 * band_m * (std::pow(spec.ring_inner_radius_m, 2) + std::pow(spec.ring_outer_radius_m, 2)) /
@@ -76,7 +77,9 @@ TEST(VirtualBevameterTest, FittedStrengthMatchesTheSoil) {
     EXPECT_LT(r.rings[i].max_shear_stress_pa,
               (1 + side_share) * circumscribed_excess * (c + sigma * std::tan(phi)))
         << sigma;
-    if (i > 0) EXPECT_GT(r.rings[i].max_shear_stress_pa, r.rings[i - 1].max_shear_stress_pa);
+    if (i > 0) {
+      EXPECT_GT(r.rings[i].max_shear_stress_pa, r.rings[i - 1].max_shear_stress_pa);
+    }
   }
   EXPECT_GT(b.friction_angle_deg, soil.strength.friction_angle_deg - 1.0);
   EXPECT_LT(b.friction_angle_deg, soil.strength.friction_angle_deg + 4.0);

@@ -11,7 +11,6 @@
 #include <cstdio>
 
 #include "solvers/common/errors.h"
-#include "solvers/rig/fe_classic_tier.h"
 #include "solvers/rig/fe_soils.h"
 
 namespace gonogo::rig {
@@ -135,37 +134,6 @@ TEST_F(WheelRigTest, SlipRampAgreesWithAConstantSlipRun) {
   const double ramp = CurveFromRun(*base_, {slip}, 0.2525)[0].drawbar_pull_n;
   std::printf("slip 0.3: constant-slip D %.0f N, ramp D %.0f N\n", d, ramp);
   EXPECT_NEAR(d, ramp, 0.05 * HalfScaleWheel().load_n + 0.25 * std::abs(d));
-}
-
-TEST(FeClassicTierTest, NamesTheSoilItCannotResolve) {
-  FeClassicTier tier;
-  SoilState soil;
-  soil.soil_name = "no_such_soil";
-  try {
-    tier.ValidateSoil(soil, "soil");
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.field(), "soil.soil_name");
-    EXPECT_NE(std::string(e.what()).find("lll_dry_sand"), std::string::npos) << e.what();
-  }
-  soil.soil_name = "lll_dry_sand";
-  EXPECT_NO_THROW(tier.ValidateSoil(soil, "soil"));
-  soil.bekker = BekkerParameters{};
-  EXPECT_THROW(tier.ValidateSoil(soil, "soil"), InputError);
-}
-
-TEST(FeClassicTierTest, ASoilThatCannotCarryTheWheelGivesAnImmobileCurve) {
-  FeClassicTier tier(FeSoilLibrary::Builtin(), FeClassicOptions{3, 2});
-  TractionRequest r;
-  r.soil.soil_name = "thailand_clayey_soil_38pct";
-  r.tyre.diameter_m = 0.505;
-  r.tyre.width_m = 0.167;
-  r.tyre.section_height_m = 0.1;
-  r.wheel_load_n = 60000;  // ~700 kPa under a small wheel on soft clay
-  r.slips = TractionRequest::SlipSweep(0.25);
-  const TractionCurve curve = tier.Compute(r);
-  EXPECT_TRUE(curve.points.empty());
-  EXPECT_NE(curve.immobile_reason.find("axle"), std::string::npos) << curve.immobile_reason;
 }
 
 TEST(FeSoilLibraryTest, ParsesTheBuiltinAndRejectsBadRows) {

@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::terramech {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = units::kRadiansPerDegree;
 
 // Wong (2008) Table 2.3, converted to SI: dry sand (Land Locomotion Lab.) and LETE sand, with
 // the K of the built-in library (2.5 cm loose sand, 1 cm firm sand).

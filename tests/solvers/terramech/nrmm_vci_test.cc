@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
 
 namespace gonogo::terramech {
 namespace {
@@ -32,7 +33,7 @@ WheeledVehicle Hmmwv() {
 
 TEST(UnitConversions, DerivedFromTheirDefinitions) {
   const double lbf_n = 4.4482216152605;  // 1 lbf = 0.45359237 kg * 9.80665 m/s^2
-  EXPECT_NEAR(kKilogramsPerPound * 9.80665, lbf_n, 1e-12);
+  EXPECT_NEAR(kKilogramsPerPound * units::kStandardGravityMps2, lbf_n, 1e-12);
   EXPECT_NEAR(kPascalsPerPsi, lbf_n / (kMetresPerInch * kMetresPerInch), 1e-9);
   EXPECT_NEAR(kWattsPerHorsepower, 550 * 0.3048 * lbf_n, 1e-9);
 }

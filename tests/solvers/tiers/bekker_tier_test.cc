@@ -70,7 +70,7 @@ TEST(BekkerTier, RigidModeFillsEveryFieldFromTheRigidWheel) {
 
 TEST(BekkerTier, ExplicitParametersOverrideTheLibrary) {
   TractionRequest req = FedAlphaRequest("lete_sand");
-  req.soil.bekker = BekkerSoilLibrary::Builtin().Find("lll_dry_sand")->parameters;
+  req.soil.parameters = BekkerSoilLibrary::Builtin().Find("lll_dry_sand")->parameters.ToSoilModel();
   const TractionCurve explicit_curve = BekkerTier().Compute(req);
   const TractionCurve dry = BekkerTier().Compute(FedAlphaRequest("lll_dry_sand"));
   for (size_t i = 0; i < dry.points.size(); ++i) {
@@ -142,12 +142,12 @@ TEST(BekkerTier, ALoadTheSoilCannotCarryGivesAnImmobileCurveWithTheReason) {
 
 TEST(BekkerTier, InvalidRequestsNameTheField) {
   TractionRequest req = FedAlphaRequest("lete_sand");
-  req.soil.bekker = BekkerParameters{0.0, 1, 1, 0, 30, 0.01};
+  req.soil.parameters = BekkerParameters{0.0, 1, 1, 0, 30, 0.01}.ToSoilModel();
   try {
     BekkerTier().Compute(req);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(e.field(), "soil.bekker.n");
+    EXPECT_EQ(e.field(), "soil.parameters.n");
   }
   req = FedAlphaRequest("lete_sand");
   req.slips = {0.1, 1.2};

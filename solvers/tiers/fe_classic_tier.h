@@ -3,8 +3,9 @@
 // Drucker-Prager soil (solvers/fe, solvers/material). The rung below fe-de and fe-ann, whose
 // closures replace the return map behind the same seam (ARCHITECTURE sections 1 and 4).
 //
-// Soil: request.soil.soil_name, a row of the fe-classic soil library (data/fe_soils.csv);
-// explicit Bekker parameters and the cone index are not read. Tyre: a rigid wheel of radius d/2
+// Soil: request.soil.parameters of the drucker-prager soil model when given, else
+// request.soil.soil_name, a row of the fe-classic soil library (solvers/rig/data/fe_soils.csv);
+// the cone index is not read. Tyre: a rigid wheel of radius d/2
 // and width b (section height, deflection and inflation pressure are not used). A curve costs
 // minutes on one core at the default resolution (README "Figures").
 //
@@ -19,7 +20,7 @@
 #include "solvers/rig/fe_soils.h"
 #include "solvers/rig/wheel_rig.h"
 
-namespace gonogo::rig {
+namespace gonogo::tiers {
 
 struct FeClassicOptions {
   double elements_per_radius = 6;  // resolution of the soil bin along the wheel path
@@ -28,14 +29,15 @@ struct FeClassicOptions {
 
 class FeClassicTier : public TractionTier {
  public:
-  FeClassicTier() : FeClassicTier(FeSoilLibrary::Builtin(), FeClassicOptions{}) {}
-  FeClassicTier(FeSoilLibrary library, FeClassicOptions options)
+  FeClassicTier() : FeClassicTier(rig::FeSoilLibrary::Builtin(), FeClassicOptions{}) {}
+  FeClassicTier(rig::FeSoilLibrary library, FeClassicOptions options)
       : library_(std::move(library)), options_(options) {}
 
   std::string Name() const override { return "fe-classic"; }
   // Bumped whenever the rig's physics changes, so cached curves of the old model are not served
-  // (2: incremental, stress-returned and viscous hourglass control).
-  std::string Version() const override { return "fe-classic-2"; }
+  // (2: incremental, stress-returned and viscous hourglass control; 3: standard gravity 9.80665
+  // m/s^2 in the soil bin and the wheel's weight, was 9.81).
+  std::string Version() const override { return "fe-classic-3"; }
   bool UsesConeIndex() const override { return false; }
   bool UsesSoilName() const override { return true; }
   TierDescription Describe() const override;
@@ -43,7 +45,8 @@ class FeClassicTier : public TractionTier {
   TierNeeds Needs(const TractionRequest& request) const override;
   void ValidateSoil(const SoilState& soil, const std::string& field) const override;
 
-  const FeSoil& ResolveSoil(const SoilState& soil, const std::string& field) const;
+  // The soil the tier runs on; throws InputError(field...) for a soil it cannot resolve.
+  rig::FeSoil ResolveSoil(const SoilState& soil, const std::string& field) const;
 
  protected:
   // Polls context.Cancelled() every 200 time steps and throws CancelledError once it is true;
@@ -52,8 +55,8 @@ class FeClassicTier : public TractionTier {
                              const ComputeContext& context) const override;
 
  private:
-  FeSoilLibrary library_;
+  rig::FeSoilLibrary library_;
   FeClassicOptions options_;
 };
 
-}  // namespace gonogo::rig
+}  // namespace gonogo::tiers

@@ -1,12 +1,35 @@
-#include "solvers/rig/fe_classic_tier.h"
+#include "solvers/tiers/fe_classic_tier.h"
 
 #include "solvers/common/errors.h"
 
-namespace gonogo::rig {
+namespace gonogo::tiers {
 
-const FeSoil& FeClassicTier::ResolveSoil(const SoilState& soil, const std::string& field) const {
-  Require(!soil.bekker.has_value(), field + ".bekker",
-          "the fe-classic tier reads a soil library name, not Bekker parameters");
+using rig::CurveFromRun;
+using rig::DrawbarPullProcedure;
+using rig::FeSoil;
+using rig::RigOptions;
+using rig::RigRun;
+using rig::RigWheel;
+using rig::RunDrawbarPullTest;
+
+FeSoil FeClassicTier::ResolveSoil(const SoilState& soil, const std::string& field) const {
+  if (soil.parameters) {
+    Require(soil.parameters->model == "drucker-prager", field + ".parameters.model",
+            "the fe-classic tier reads parameters of the drucker-prager soil model, not '" +
+                soil.parameters->model + "'");
+    const SoilParameters p = SoilModels().Validate(*soil.parameters, field + ".parameters");
+    FeSoil explicit_soil;
+    explicit_soil.name = CanonicalText(p);
+    explicit_soil.density_kg_m3 = p.Get("density_kg_m3");
+    explicit_soil.strength.young_pa = p.Get("young_pa");
+    explicit_soil.strength.poisson = p.Get("poisson");
+    explicit_soil.strength.cohesion_pa = p.Get("cohesion_pa");
+    explicit_soil.strength.friction_angle_deg = p.Get("friction_angle_deg");
+    explicit_soil.strength.dilation_angle_deg = p.Get("dilation_angle_deg");
+    explicit_soil.source = "explicit parameters";
+    explicit_soil.Validate(field + ".parameters.");
+    return explicit_soil;
+  }
   const FeSoil* found = library_.Find(soil.soil_name);
   if (found == nullptr) {
     std::string known;
@@ -26,8 +49,10 @@ void FeClassicTier::ValidateSoil(const SoilState& soil, const std::string& field
 TierDescription FeClassicTier::Describe() const {
   return {"explicit FE soil bin (hex8, total Lagrangian) with a Drucker-Prager closure; rigid "
           "wheel through seed 001's drawbar-pull procedure",
-          "soil name (fe-classic soil library); tyre diameter and width; wheel load",
-          "minutes on one core"};
+          "soil name (fe-classic soil library) or drucker-prager parameters; tyre diameter and "
+          "width; wheel load",
+          "minutes on one core",
+          {"drucker-prager"}};
 }
 
 TierNeeds FeClassicTier::Needs(const TractionRequest& /*request*/) const {
@@ -40,7 +65,7 @@ TierNeeds FeClassicTier::Needs(const TractionRequest& /*request*/) const {
 TractionCurve FeClassicTier::ComputeCurve(const TractionRequest& request,
                                           const ComputeContext& context) const {
   request.Validate();
-  const FeSoil& soil = ResolveSoil(request.soil, "soil");
+  const FeSoil soil = ResolveSoil(request.soil, "soil");
   RigWheel wheel;
   wheel.radius_m = 0.5 * request.tyre.diameter_m;
   wheel.width_m = request.tyre.width_m;
@@ -63,4 +88,4 @@ TractionCurve FeClassicTier::ComputeCurve(const TractionRequest& request,
   return curve;
 }
 
-}  // namespace gonogo::rig
+}  // namespace gonogo::tiers

@@ -1,0 +1,159 @@
+#include "clients/cli_client.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace gonogo::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Progress on stderr: a redrawn bar on a terminal, a line per 10 % (or new state) otherwise.
+class ProgressBar {
+ public:
+  ProgressBar() : tty_(isatty(STDERR_FILENO)) {}
+
+  void Show(const v1::JobStatus& s) {
+    const int percent = static_cast<int>(std::floor(100 * s.fraction_done()));
+    const int filled = percent * 30 / 100;
+    std::ostringstream line;
+    line << "[" << std::string(filled, '#') << std::string(30 - filled, '-') << "] " << std::setw(3)
+         << percent << "%  tasks " << s.tasks_done() << "/" << s.tasks_total() << "  cache hits "
+         << s.cache_hits() << "  similar " << s.similarity_hits() << "  " << StateName(s.state())
+         << ": " << s.message();
+    if (tty_) {
+      std::cerr << "\r\033[K" << line.str() << std::flush;
+    } else if (percent / 10 != last_decile_ || s.state() != last_state_) {
+      std::cerr << line.str() << "\n";
+    }
+    last_decile_ = percent / 10;
+    last_state_ = s.state();
+  }
+
+  void Done() {
+    if (tty_) std::cerr << "\n";
+  }
+
+ private:
+  bool tty_;
+  int last_decile_ = -1;
+  v1::JobState last_state_ = v1::JOB_STATE_UNSPECIFIED;
+};
+
+// Only plain file names are accepted from the server.
+bool IsPlainFileName(const std::string& name) {
+  return !name.empty() && name.find('/') == std::string::npos && name[0] != '.';
+}
+
+}  // namespace
+
+std::string ReadFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UsageError(what + ": cannot read " + path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int Fail(const grpc::Status& s) {
+  static const char* kNames[] = {"OK",
+                                 "CANCELLED",
+                                 "UNKNOWN",
+                                 "INVALID_ARGUMENT",
+                                 "DEADLINE_EXCEEDED",
+                                 "NOT_FOUND",
+                                 "ALREADY_EXISTS",
+                                 "PERMISSION_DENIED",
+                                 "RESOURCE_EXHAUSTED",
+                                 "FAILED_PRECONDITION",
+                                 "ABORTED",
+                                 "OUT_OF_RANGE",
+                                 "UNIMPLEMENTED",
+                                 "INTERNAL",
+                                 "UNAVAILABLE",
+                                 "DATA_LOSS",
+                                 "UNAUTHENTICATED"};
+  const int code = static_cast<int>(s.error_code());
+  std::cerr << "gonogo: " << (code >= 0 && code <= 16 ? kNames[code] : "ERROR") << ": "
+            << s.error_message() << "\n";
+  return kExitServer;
+}
+
+const char* StateName(v1::JobState s) {
+  switch (s) {
+    case v1::JOB_STATE_QUEUED:
+      return "QUEUED";
+    case v1::JOB_STATE_RUNNING:
+      return "RUNNING";
+    case v1::JOB_STATE_DONE:
+      return "DONE";
+    case v1::JOB_STATE_FAILED:
+      return "FAILED";
+    case v1::JOB_STATE_CANCELLED:
+      return "CANCELLED";
+    default:
+      return "UNKNOWN";
+  }
+}
+
+Client::Client(const std::string& endpoint)
+    : stub_(v1::MobilityService::NewStub(
+          grpc::CreateChannel(endpoint, grpc::InsecureChannelCredentials()))) {}
+
+grpc::Status Client::Watch(const std::string& id, v1::JobStatus* last) {
+  ProgressBar bar;
+  grpc::ClientContext ctx;
+  v1::WatchJobRequest req;
+  req.set_job_id(id);
+  auto reader = stub_->WatchJob(&ctx, req);
+  v1::JobStatus s;
+  while (reader->Read(&s)) {
+    bar.Show(s);
+    *last = s;
+  }
+  bar.Done();
+  return reader->Finish();
+}
+
+grpc::Status Client::Download(const std::string& id, const std::string& out_dir,
+                              std::vector<std::string>* written) {
+  fs::create_directories(out_dir);
+  grpc::ClientContext ctx;
+  v1::DownloadResultRequest req;
+  req.set_job_id(id);
+  auto reader = stub_->DownloadResult(&ctx, req);
+  v1::ResultChunk chunk;
+  std::ofstream out;
+  std::string current;
+  while (reader->Read(&chunk)) {
+    if (chunk.product() != current) {
+      out.close();
+      current = chunk.product();
+      if (!IsPlainFileName(current)) {
+        return {grpc::StatusCode::INTERNAL, "server sent a bad product name"};
+      }
+      out.open(fs::path(out_dir) / current, std::ios::binary | std::ios::trunc);
+      written->push_back((fs::path(out_dir) / current).string());
+    }
+    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+  }
+  return reader->Finish();
+}
+
+int Client::WaitUntilDone(const std::string& id, const std::string& what) {
+  v1::JobStatus last;
+  const grpc::Status watched = Watch(id, &last);
+  if (!watched.ok()) return Fail(watched);
+  if (last.state() == v1::JOB_STATE_DONE) return kExitOk;
+  std::cerr << "gonogo: " << what << " " << id << " " << StateName(last.state()) << ": "
+            << last.message() << "\n";
+  return kExitJobFailed;
+}
+
+}  // namespace gonogo::cli
