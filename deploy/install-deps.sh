@@ -14,6 +14,8 @@ packages=(
   libsqlite3-dev sqlite3 libgdal-dev gdal-bin python3-gdal nlohmann-json3-dev
   # command-line parsing for every program; structured logging in the server
   libcli11-dev libspdlog-dev
+  # drawing the PNG plots and quicklooks (server/geo), and their font
+  libcairo2-dev fonts-dejavu-core
   # tests
   libgtest-dev libgmock-dev
 )

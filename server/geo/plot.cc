@@ -1,34 +1,31 @@
 #include "server/geo/plot.h"
 
+#include <cairo.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <stdexcept>
-#include <system_error>
 
-#include "server/geo/bitmap_font.h"
-#include "server/geo/gdal_util.h"
 #include "server/geo/quicklook.h"
 #include "solvers/common/errors.h"
 
 namespace gonogo::geo {
 namespace {
 
-namespace fs = std::filesystem;
 using internal::Rgba;
-using internal::RgbaImage;
 
 const char kField[] = "plot";
 
-// Text: titles at twice the font size, everything else at its own size.
-constexpr int kTitleScale = 2;
-constexpr int kTextScale = 1;
-constexpr int kTextHeightPx = internal::kGlyphHeight * kTextScale;
+// Text (DejaVu Sans, em size in pixels): bold titles, shrunk to fit a panel down to the label
+// size; tick labels a little smaller than axis labels and legend.
+constexpr double kTitleFontPx = 15.0;
+constexpr double kLabelFontPx = 12.0;
+constexpr double kTickFontPx = 11.0;
 
 // Panel decorations, relative to the panel's top-left corner (the plot area is in plot.h).
 constexpr int kTitleTopPx = 8;
-constexpr int kYLabelLeftPx = 8;
+constexpr int kYLabelLeftPx = 6;
 constexpr int kTickLengthPx = 4;
 constexpr int kTickLabelGapPx = 3;  // between a tick mark's end and its label
 constexpr int kXLabelGapPx = 8;     // between the x tick labels and the x-axis label
@@ -50,8 +47,8 @@ constexpr int kLegendRightMarginPx = 16;
 // Line style.
 constexpr int kLineWidthPx = 2;
 constexpr int kMarkerPx = 5;
-constexpr double kDashOnPx = 8.0;
-constexpr double kDashOffPx = 5.0;
+constexpr double kDashPx[] = {8.0, 5.0};                // on, off
+constexpr double kQuarterTurnRad = 1.5707963267948966;  // pi / 2
 
 constexpr Rgba kBackground{255, 255, 255, 255};
 constexpr Rgba kTextColour{0, 0, 0, 255};
@@ -62,17 +59,48 @@ Rgba Opaque(const std::array<uint8_t, 3>& rgb) { return {rgb[0], rgb[1], rgb[2],
 
 bool Finite(double v) { return std::isfinite(v); }
 
+void SetColour(cairo_t* cr, Rgba c) {
+  cairo_set_source_rgb(cr, c.r / 255.0, c.g / 255.0, c.b / 255.0);
+}
+
+// A filled rectangle on whole pixels, so its colour is exact whatever the antialiasing.
+void FillRect(cairo_t* cr, int x, int y, int w, int h, Rgba c) {
+  SetColour(cr, c);
+  cairo_rectangle(cr, x, y, w, h);
+  cairo_fill(cr);
+}
+
+// Advance width of `text` in pixels at the current font.
+double TextWidthPx(cairo_t* cr, const std::string& text) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  return extents.x_advance;
+}
+
+// Height of a capital (or digit) above the baseline at the current font: text is placed by its
+// capitals, so labels with and without descenders line up.
+double CapHeightPx(cairo_t* cr) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, "H", &extents);
+  return extents.height;
+}
+
+// Draws `text` in kTextColour with the left end of its baseline at (x, baseline).
+void DrawText(cairo_t* cr, double x, double baseline, const std::string& text) {
+  SetColour(cr, kTextColour);
+  cairo_move_to(cr, x, baseline);
+  cairo_show_text(cr, text.c_str());
+}
+
 // A pixel rectangle, [left, left + width) x [top, top + height).
 struct PixelRect {
   int left = 0, top = 0, width = 0, height = 0;
 };
 
-// Fills a rectangle clipped to `clip`, so data drawn with it never spills onto axes or labels.
-void FillClipped(RgbaImage& image, const PixelRect& clip, int x, int y, int w, int h, Rgba c) {
-  const int x0 = std::max(x, clip.left), y0 = std::max(y, clip.top);
-  const int x1 = std::min(x + w, clip.left + clip.width);
-  const int y1 = std::min(y + h, clip.top + clip.height);
-  if (x1 > x0 && y1 > y0) image.Fill(x0, y0, x1 - x0, y1 - y0, c);
+// Restricts drawing to `r` until the next cairo_restore (the caller saves first).
+void ClipTo(cairo_t* cr, const PixelRect& r) {
+  cairo_rectangle(cr, r.left, r.top, r.width, r.height);
+  cairo_clip(cr);
 }
 
 // One axis: its range, tick values and the decimals their labels need.
@@ -133,20 +161,20 @@ std::string Number(double value) {
   return text;
 }
 
-int WidestTickLabelPx(const Axis& axis) {
-  int widest = 0;
-  for (double v : axis.ticks) {
-    widest = std::max(widest, internal::TextWidthPx(FormatTick(v, axis.decimals), kTextScale));
-  }
+// `cr` carries the tick-label font.
+double WidestTickLabelPx(cairo_t* cr, const Axis& axis) {
+  double widest = 0.0;
+  for (double v : axis.ticks)
+    widest = std::max(widest, TextWidthPx(cr, FormatTick(v, axis.decimals)));
   return widest;
 }
 
 // Fewer x ticks while neighbouring labels would touch: labels such as "-0.0025" need more room than
 // the default tick count leaves them.
-void FitXTickLabels(Axis& axis) {
+void FitXTickLabels(cairo_t* cr, Axis& axis) {
   const double px_per_unit = (kPlotAreaWidthPx - 1) / (axis.max - axis.min);
   for (int target = kXTickTarget - 1;
-       target >= 2 && WidestTickLabelPx(axis) + kMinTickLabelGapPx > axis.step * px_per_unit;
+       target >= 2 && WidestTickLabelPx(cr, axis) + kMinTickLabelGapPx > axis.step * px_per_unit;
        --target) {
     SetNiceTicks(axis, target);
   }
@@ -209,7 +237,8 @@ struct Frame {
   }
 };
 
-Frame MakeFrame(const PlotPanel& panel, int panel_index) {
+// `cr` is only measured with (tick-label widths).
+Frame MakeFrame(cairo_t* cr, const PlotPanel& panel, int panel_index) {
   Extent xs, ys;
   for (const PlotSeries& s : panel.series) {
     for (size_t i = 0; i < s.x.size(); ++i) {
@@ -233,7 +262,8 @@ Frame MakeFrame(const PlotPanel& panel, int panel_index) {
   frame.area = {panel_index * kPlotPanelWidthPx + kPlotAreaLeftPx, kPlotAreaTopPx, kPlotAreaWidthPx,
                 kPlotAreaHeightPx};
   frame.x = ResolveAxis(panel.x_min, panel.x_max, xs, kXTickTarget, where + " x axis");
-  FitXTickLabels(frame.x);
+  internal::SelectFont(cr, kTickFontPx);
+  FitXTickLabels(cr, frame.x);
   frame.y = ResolveAxis(panel.y_min, panel.y_max, ys, kYTickTarget, where + " y axis");
   return frame;
 }
@@ -269,82 +299,83 @@ bool ClipSegment(const Frame& f, double& x0, double& y0, double& x1, double& y1)
   return true;
 }
 
-// Draws data lines and markers on the image, clipped to one rectangle.
-class Pen {
- public:
-  Pen(RgbaImage& image, const PixelRect& clip, Rgba colour)
-      : image_(image), clip_(clip), colour_(colour) {}
-
-  // A size x size square centred on (col, row) (the extra pixel of an even size goes right/down).
-  void Square(int col, int row, int size) {
-    const int offset = (size - 1) / 2;
-    FillClipped(image_, clip_, col - offset, row - offset, size, size, colour_);
-  }
-
-  // Bresenham from (c0, r0) to (c1, r1), a line-width square at each step. For dashed lines
-  // `dash_phase_px` is the length drawn so far along the polyline, so dashes run on across joints.
-  void Segment(int c0, int r0, int c1, int r1, bool dashed, double* dash_phase_px) {
-    const int dc = std::abs(c1 - c0), dr = -std::abs(r1 - r0);
-    const int step_c = c0 < c1 ? 1 : -1, step_r = r0 < r1 ? 1 : -1;
-    const int steps = std::max(dc, -dr);
-    const double step_length = steps == 0 ? 0.0 : std::hypot(dc, dr) / steps;
-    int error = dc + dr;
-    for (int c = c0, r = r0;;) {
-      if (!dashed || std::fmod(*dash_phase_px, kDashOnPx + kDashOffPx) < kDashOnPx) {
-        Square(c, r, kLineWidthPx);
-      }
-      if (c == c1 && r == r1) break;
-      *dash_phase_px += step_length;
-      const int doubled = 2 * error;
-      if (doubled >= dr) {
-        error += dr;
-        c += step_c;
-      }
-      if (doubled <= dc) {
-        error += dc;
-        r += step_r;
-      }
-    }
-  }
-
- private:
-  RgbaImage& image_;
-  PixelRect clip_;
-  Rgba colour_;
-};
+// Data lines, markers and bands are drawn without antialiasing, on whole pixels: every pixel of a
+// series then has exactly the series colour (the tests find points by colour, and bands and lines
+// never blend into each other), and the geometry matches the documented layout to the pixel.
+// Text keeps cairo's greyscale antialiasing.
 
 int Pixel(double v) { return static_cast<int>(std::lround(v)); }
 
-void DrawSeries(RgbaImage& image, const Frame& f, const PlotSeries& s) {
-  Pen pen(image, f.area, Opaque(s.rgb));
+// Where a polyline vertex goes: the corner between the point's pixel and its right and lower
+// neighbours, so the 2 px line covers the point's pixel and one more each way, with no sample on
+// the stroke's edge (unambiguous without antialiasing).
+double LineX(const Frame& f, double x) { return Pixel(f.Col(x)) + 1.0; }
+double LineY(const Frame& f, double y) { return Pixel(f.Row(y)) + 1.0; }
+
+// A size x size square centred on pixel (col, row) (the extra pixel of an even size goes
+// right/down), added to the current path.
+void AddSquare(cairo_t* cr, int col, int row, int size) {
+  const int offset = (size - 1) / 2;
+  cairo_rectangle(cr, col - offset, row - offset, size, size);
+}
+
+// The stroke of a series: 2 px, round caps and joins when solid, 8 on / 5 off butt-ended dashes
+// (continued across joints) when dashed.
+void SetLineStyle(cairo_t* cr, const PlotSeries& s) {
+  cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);
+  cairo_set_line_width(cr, kLineWidthPx);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  cairo_set_line_cap(cr, s.dashed ? CAIRO_LINE_CAP_BUTT : CAIRO_LINE_CAP_ROUND);
+  if (s.dashed) cairo_set_dash(cr, kDashPx, 2, 0.0);
+  SetColour(cr, Opaque(s.rgb));
+}
+
+void DrawSeries(cairo_t* cr, const Frame& f, const PlotSeries& s) {
+  cairo_save(cr);
+  ClipTo(cr, f.area);
+  SetLineStyle(cr, s);
   const size_t n = s.x.size();
   auto usable = [&](size_t i) { return i < n && Finite(s.x[i]) && Finite(s.y[i]); };
-  double dash_phase_px = 0.0;
+  // One path for the whole series: a NaN point or a clipped end starts a new sub-path (and a new
+  // dash pattern); otherwise the line runs on through the joint.
+  bool joined = false;  // the current sub-path ends at point i - 1
   for (size_t i = 0; i < n; ++i) {
-    if (!usable(i)) {
-      dash_phase_px = 0.0;  // a new piece of line starts a new dash pattern
+    if (!usable(i) || i == 0 || !usable(i - 1)) {
+      joined = false;
       continue;
     }
-    const bool joined_before = i > 0 && usable(i - 1);
-    if (joined_before) {
-      double x0 = s.x[i - 1], y0 = s.y[i - 1], x1 = s.x[i], y1 = s.y[i];
-      if (ClipSegment(f, x0, y0, x1, y1)) {
-        pen.Segment(Pixel(f.Col(x0)), Pixel(f.Row(y0)), Pixel(f.Col(x1)), Pixel(f.Row(y1)),
-                    s.dashed, &dash_phase_px);
-      }
+    double x0 = s.x[i - 1], y0 = s.y[i - 1], x1 = s.x[i], y1 = s.y[i];
+    if (!ClipSegment(f, x0, y0, x1, y1)) {
+      joined = false;
+      continue;
     }
-    const bool isolated = !joined_before && !usable(i + 1);
+    if (!joined || x0 != s.x[i - 1] || y0 != s.y[i - 1]) {
+      cairo_move_to(cr, LineX(f, x0), LineY(f, y0));
+    }
+    cairo_line_to(cr, LineX(f, x1), LineY(f, y1));
+    joined = x1 == s.x[i] && y1 == s.y[i];
+  }
+  cairo_stroke(cr);
+  // Markers, and a 2 px dot for a point with no finite neighbour so it does not vanish.
+  for (size_t i = 0; i < n; ++i) {
+    if (!usable(i)) continue;
+    const bool isolated = !(i > 0 && usable(i - 1)) && !usable(i + 1);
     if ((s.markers || isolated) && f.Contains(s.x[i], s.y[i])) {
-      pen.Square(Pixel(f.Col(s.x[i])), Pixel(f.Row(s.y[i])), s.markers ? kMarkerPx : kLineWidthPx);
+      AddSquare(cr, Pixel(f.Col(s.x[i])), Pixel(f.Row(s.y[i])),
+                s.markers ? kMarkerPx : kLineWidthPx);
     }
   }
+  cairo_fill(cr);
+  cairo_restore(cr);
 }
 
 // Fills each image column between consecutive band points from the interpolated lower to upper
 // value; the column's data x is interpolated in data space, so no pixel coordinate overflows.
-void DrawBand(RgbaImage& image, const Frame& f, const PlotBand& b) {
-  const Rgba colour = Opaque(b.rgb);
+void DrawBand(cairo_t* cr, const Frame& f, const PlotBand& b) {
   const PixelRect& a = f.area;
+  cairo_save(cr);
+  ClipTo(cr, a);
+  cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);
   for (size_t i = 0; i + 1 < b.x.size(); ++i) {
     size_t p = i, q = i + 1;
     if (b.x[p] > b.x[q]) std::swap(p, q);
@@ -360,66 +391,80 @@ void DrawBand(RgbaImage& image, const Frame& f, const PlotBand& b) {
       const double t = xb > xa ? (x - xa) / (xb - xa) : 0.0;
       const double lower = b.lower[p] + t * (b.lower[q] - b.lower[p]);
       const double upper = b.upper[p] + t * (b.upper[q] - b.upper[p]);
-      // Clamped just outside the area before the conversion to int; FillClipped trims the rest.
+      // Clamped just outside the area before the conversion to int; the clip trims the rest.
       const double row_lo = a.top - 1.0, row_hi = a.top + a.height;
       const int top = Pixel(std::clamp(f.Row(std::max(lower, upper)), row_lo, row_hi));
       const int bottom = Pixel(std::clamp(f.Row(std::min(lower, upper)), row_lo, row_hi));
-      FillClipped(image, a, col, top, 1, bottom - top + 1, colour);
+      cairo_rectangle(cr, col, top, 1, bottom - top + 1);
     }
   }
-}
-
-void DrawCentredText(RgbaImage& image, int centre_x, int y, const std::string& text, int scale) {
-  internal::DrawText(image, centre_x - internal::TextWidthPx(text, scale) / 2, y, text, scale,
-                     kTextColour);
+  SetColour(cr, Opaque(b.rgb));
+  cairo_fill(cr);
+  cairo_restore(cr);
 }
 
 // Light grid lines at the ticks, drawn first so bands and lines cover them.
-void DrawGrid(RgbaImage& image, const Frame& f) {
+void DrawGrid(cairo_t* cr, const Frame& f) {
   const PixelRect& a = f.area;
-  for (double v : f.x.ticks) {
-    FillClipped(image, a, Pixel(f.Col(v)), a.top, 1, a.height, kGridColour);
-  }
-  for (double v : f.y.ticks) {
-    FillClipped(image, a, a.left, Pixel(f.Row(v)), a.width, 1, kGridColour);
-  }
+  cairo_save(cr);
+  ClipTo(cr, a);
+  for (double v : f.x.ticks) FillRect(cr, Pixel(f.Col(v)), a.top, 1, a.height, kGridColour);
+  for (double v : f.y.ticks) FillRect(cr, a.left, Pixel(f.Row(v)), a.width, 1, kGridColour);
+  cairo_restore(cr);
 }
 
 // The frame just outside the plot area, outward tick marks with their labels, the title and the
-// axis labels.
-void DrawAxes(RgbaImage& image, const Frame& f, const PlotPanel& panel, int panel_left) {
+// axis labels; all clipped to the panel.
+void DrawAxes(cairo_t* cr, const Frame& f, const PlotPanel& panel, int panel_left) {
   const PixelRect& a = f.area;
+  cairo_save(cr);
+  ClipTo(cr, {panel_left, 0, kPlotPanelWidthPx, kPlotPanelHeightPx});
   const int right = a.left + a.width;   // the frame's right column
   const int bottom = a.top + a.height;  // the frame's bottom row
-  image.Fill(a.left - 1, a.top - 1, a.width + 2, 1, kAxisColour);
-  image.Fill(a.left - 1, bottom, a.width + 2, 1, kAxisColour);
-  image.Fill(a.left - 1, a.top - 1, 1, a.height + 2, kAxisColour);
-  image.Fill(right, a.top - 1, 1, a.height + 2, kAxisColour);
+  FillRect(cr, a.left - 1, a.top - 1, a.width + 2, 1, kAxisColour);
+  FillRect(cr, a.left - 1, bottom, a.width + 2, 1, kAxisColour);
+  FillRect(cr, a.left - 1, a.top - 1, 1, a.height + 2, kAxisColour);
+  FillRect(cr, right, a.top - 1, 1, a.height + 2, kAxisColour);
 
+  internal::SelectFont(cr, kTickFontPx);
+  const double tick_cap_px = CapHeightPx(cr);
   const int x_label_top = bottom + 1 + kTickLengthPx + kTickLabelGapPx;
   for (double v : f.x.ticks) {
     const int col = Pixel(f.Col(v));
-    image.Fill(col, bottom + 1, 1, kTickLengthPx, kAxisColour);
-    DrawCentredText(image, col, x_label_top, FormatTick(v, f.x.decimals), kTextScale);
+    FillRect(cr, col, bottom + 1, 1, kTickLengthPx, kAxisColour);
+    const std::string label = FormatTick(v, f.x.decimals);
+    DrawText(cr, col + 0.5 - TextWidthPx(cr, label) / 2, x_label_top + tick_cap_px, label);
   }
   const int y_label_right = a.left - 1 - kTickLengthPx - kTickLabelGapPx;
   for (double v : f.y.ticks) {
     const int row = Pixel(f.Row(v));
-    image.Fill(a.left - 1 - kTickLengthPx, row, kTickLengthPx, 1, kAxisColour);
+    FillRect(cr, a.left - 1 - kTickLengthPx, row, kTickLengthPx, 1, kAxisColour);
     const std::string label = FormatTick(v, f.y.decimals);
-    internal::DrawText(image, y_label_right - internal::TextWidthPx(label, kTextScale),
-                       row - kTextHeightPx / 2, label, kTextScale, kTextColour);
+    DrawText(cr, y_label_right - TextWidthPx(cr, label), row + 0.5 + tick_cap_px / 2, label);
   }
 
-  const int centre_x = a.left + a.width / 2;
-  const int title_scale =
-      internal::TextWidthPx(panel.title, kTitleScale) <= kPlotPanelWidthPx - 8 ? kTitleScale : 1;
-  DrawCentredText(image, centre_x, kTitleTopPx, panel.title, title_scale);
-  DrawCentredText(image, centre_x, x_label_top + kTextHeightPx + kXLabelGapPx, panel.x_label,
-                  kTextScale);
-  internal::DrawTextUp(image, panel_left + kYLabelLeftPx,
-                       a.top + (a.height - internal::TextWidthPx(panel.y_label, kTextScale)) / 2,
-                       panel.y_label, kTextScale, kTextColour);
+  // The title, shrunk (not below the label size) when it is wider than the panel.
+  const double centre_x = a.left + a.width / 2.0;
+  internal::SelectFont(cr, kTitleFontPx, /*bold=*/true);
+  const double room_px = kPlotPanelWidthPx - 8;
+  const double title_px = TextWidthPx(cr, panel.title);
+  if (title_px > room_px) {
+    internal::SelectFont(cr, std::max(kLabelFontPx, kTitleFontPx * room_px / title_px), true);
+  }
+  DrawText(cr, centre_x - TextWidthPx(cr, panel.title) / 2, kTitleTopPx + CapHeightPx(cr),
+           panel.title);
+
+  internal::SelectFont(cr, kLabelFontPx);
+  const double label_cap_px = CapHeightPx(cr);
+  DrawText(cr, centre_x - TextWidthPx(cr, panel.x_label) / 2,
+           x_label_top + tick_cap_px + kXLabelGapPx + label_cap_px, panel.x_label);
+  // The y label reads bottom to top: its baseline is a vertical line, the capitals to its left.
+  cairo_move_to(cr, panel_left + kYLabelLeftPx + label_cap_px,
+                a.top + (a.height + TextWidthPx(cr, panel.y_label)) / 2);
+  cairo_rotate(cr, -kQuarterTurnRad);
+  SetColour(cr, kTextColour);
+  cairo_show_text(cr, panel.y_label.c_str());
+  cairo_restore(cr);
 }
 
 // Where each legend entry goes: its top-left corner in the image.
@@ -428,14 +473,17 @@ struct LegendEntry {
   int x, y;
 };
 
-std::vector<LegendEntry> LayoutLegend(const PlotPanel& first, int image_width, int* rows) {
+// `cr` is only measured with.
+std::vector<LegendEntry> LayoutLegend(cairo_t* cr, const PlotPanel& first, int image_width,
+                                      int* rows) {
+  internal::SelectFont(cr, kLabelFontPx);
   std::vector<LegendEntry> entries;
   const int start_x = kPlotAreaLeftPx;
   int x = start_x, row = 0;
   for (const PlotSeries& s : first.series) {
     if (s.label.empty()) continue;
     const int width =
-        kLegendSamplePx + kLegendTextGapPx + internal::TextWidthPx(s.label, kTextScale);
+        kLegendSamplePx + kLegendTextGapPx + static_cast<int>(std::ceil(TextWidthPx(cr, s.label)));
     if (x > start_x && x + width > image_width - kLegendRightMarginPx) {
       x = start_x;
       ++row;
@@ -447,17 +495,25 @@ std::vector<LegendEntry> LayoutLegend(const PlotPanel& first, int image_width, i
   return entries;
 }
 
-void DrawLegend(RgbaImage& image, const std::vector<LegendEntry>& entries) {
+// Each entry: a short sample of the line (with its marker) and the label.
+void DrawLegend(cairo_t* cr, const std::vector<LegendEntry>& entries) {
+  internal::SelectFont(cr, kLabelFontPx);
+  const double cap_px = CapHeightPx(cr);
   for (const LegendEntry& e : entries) {
     const PlotSeries& s = *e.series;
     const int mid = e.y + kLegendRowPx / 2;
-    const PixelRect sample{e.x, e.y, kLegendSamplePx, kLegendRowPx};
-    Pen pen(image, sample, Opaque(s.rgb));
-    double dash_phase_px = 0.0;
-    pen.Segment(e.x, mid, e.x + kLegendSamplePx - 2, mid, s.dashed, &dash_phase_px);
-    if (s.markers) pen.Square(e.x + kLegendSamplePx / 2, mid, kMarkerPx);
-    internal::DrawText(image, e.x + kLegendSamplePx + kLegendTextGapPx, mid - kTextHeightPx / 2,
-                       s.label, kTextScale, kTextColour);
+    cairo_save(cr);
+    ClipTo(cr, {e.x, e.y, kLegendSamplePx, kLegendRowPx});
+    SetLineStyle(cr, s);
+    cairo_move_to(cr, e.x + 1, mid);
+    cairo_line_to(cr, e.x + kLegendSamplePx - 1, mid);
+    cairo_stroke(cr);
+    if (s.markers) {
+      AddSquare(cr, e.x + kLegendSamplePx / 2, mid - 1, kMarkerPx);
+      cairo_fill(cr);
+    }
+    cairo_restore(cr);
+    DrawText(cr, e.x + kLegendSamplePx + kLegendTextGapPx, mid + cap_px / 2, s.label);
   }
 }
 
@@ -489,57 +545,48 @@ void CheckArguments(const std::vector<PlotPanel>& panels, const std::string& pat
   }
 }
 
-RgbaImage RenderPlot(const std::vector<PlotPanel>& panels) {
-  // Every axis is resolved (and checked) before anything is drawn.
+internal::CairoSurface RenderPlot(const std::vector<PlotPanel>& panels) {
+  // Every axis is resolved (and checked) and the legend laid out before anything is drawn; text is
+  // measured on a scratch surface because the image height depends on the legend.
+  const internal::CairoSurface scratch = internal::NewImageSurface(CAIRO_FORMAT_RGB24, 1, 1);
+  const internal::CairoContext measure = internal::NewContext(scratch.get());
   std::vector<Frame> frames;
   for (size_t i = 0; i < panels.size(); ++i) {
-    frames.push_back(MakeFrame(panels[i], static_cast<int>(i)));
+    frames.push_back(MakeFrame(measure.get(), panels[i], static_cast<int>(i)));
   }
-  RgbaImage image;
-  image.width = kPlotPanelWidthPx * static_cast<int>(panels.size());
+  const int width = kPlotPanelWidthPx * static_cast<int>(panels.size());
   int legend_rows = 0;
-  const std::vector<LegendEntry> legend = LayoutLegend(panels[0], image.width, &legend_rows);
-  image.height = kPlotPanelHeightPx;
-  if (legend_rows > 0) {
-    image.height += kLegendPadTopPx + legend_rows * kLegendRowPx + kLegendPadBottomPx;
-  }
-  image.pixels.resize(static_cast<size_t>(image.width) * image.height * 4);
-  image.Fill(0, 0, image.width, image.height, kBackground);
+  const std::vector<LegendEntry> legend =
+      LayoutLegend(measure.get(), panels[0], width, &legend_rows);
+  int height = kPlotPanelHeightPx;
+  if (legend_rows > 0) height += kLegendPadTopPx + legend_rows * kLegendRowPx + kLegendPadBottomPx;
 
+  internal::CairoSurface surface = internal::NewImageSurface(CAIRO_FORMAT_RGB24, width, height);
+  const internal::CairoContext context = internal::NewContext(surface.get());
+  cairo_t* cr = context.get();
+  FillRect(cr, 0, 0, width, height, kBackground);
   for (size_t i = 0; i < panels.size(); ++i) {
     const Frame& f = frames[i];
-    DrawGrid(image, f);
-    for (const PlotBand& b : panels[i].bands) DrawBand(image, f, b);
-    for (const PlotSeries& s : panels[i].series) DrawSeries(image, f, s);
-    DrawAxes(image, f, panels[i], static_cast<int>(i) * kPlotPanelWidthPx);
+    DrawGrid(cr, f);
+    for (const PlotBand& b : panels[i].bands) DrawBand(cr, f, b);
+    for (const PlotSeries& s : panels[i].series) DrawSeries(cr, f, s);
+    DrawAxes(cr, f, panels[i], static_cast<int>(i) * kPlotPanelWidthPx);
   }
-  DrawLegend(image, legend);
-  return image;
+  DrawLegend(cr, legend);
+  const cairo_status_t status = cairo_status(cr);
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error(std::string("cannot draw the plot: ") +
+                             cairo_status_to_string(status));
+  }
+  return surface;
 }
 
 }  // namespace
 
 void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path) {
   CheckArguments(panels, path);
-  const RgbaImage image = RenderPlot(panels);
-  internal::EnsureGdalRegistered();
-  internal::GdalErrorScope gdal_errors;
-  // A temporary name and a rename, so a reader never sees a partial file.
-  const std::string partial = path + ".partial";
-  try {
-    internal::WritePng(image, partial, /*with_alpha=*/false);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(partial, ignored);
-    throw;
-  }
-  std::error_code renamed;
-  fs::rename(partial, path, renamed);
-  if (renamed) {
-    std::error_code ignored;
-    fs::remove(partial, ignored);
-    throw std::runtime_error("cannot write " + path + ": " + renamed.message());
-  }
+  // RGB24: cairo writes an opaque RGB PNG, under a temporary name that is then renamed.
+  internal::WritePngAtomically(RenderPlot(panels).get(), path);
 }
 
 }  // namespace gonogo::geo

@@ -54,8 +54,10 @@ inline constexpr int kPlotMaxPanels = 16;
 // Writes an opaque RGB PNG at `path`: the panels side by side (kPlotPanelWidthPx x
 // kPlotPanelHeightPx each) and, below them, a legend of the first panel's labelled series (rows of
 // 18 px plus 10 px of padding, wrapped to the image width; no legend and no extra height when no
-// series of the first panel has a label). Text uses the built-in 5x7 font: titles at twice its size
-// (once when too wide), everything else at its own size. Tick labels are plain decimals.
+// series of the first panel has a label). Drawn with cairo; text in DejaVu Sans: bold 15 px titles
+// (shrunk to fit a panel, not below 12 px), 12 px axis labels and legend, 11 px tick labels, which
+// are plain decimals. Lines, markers and bands are not antialiased: their pixels have exactly the
+// series or band colour.
 //
 // The file appears complete or not at all (written under a temporary name, then renamed); the
 // directory must exist. Throws InputError("plot", ...) for bad arguments: no panels or more than

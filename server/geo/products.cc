@@ -142,17 +142,11 @@ void WriteSpeedCog(const Grid& grid, const std::vector<float>& speed_kmh,
   WriteCog(*mem, path, options);
 }
 
+// Drawn with cairo (quicklook.h), written under a temporary name and renamed.
 void WriteQuicklook(const Grid& grid, const std::vector<uint8_t>& go_class,
                     const std::string& path) {
-  const std::string partial = path + ".partial";
-  try {
-    internal::WritePng(internal::RenderQuicklook(grid.width, grid.height, go_class), partial);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove(partial, ignored);
-    throw;
-  }
-  fs::rename(partial, path);
+  internal::WritePngAtomically(internal::RenderQuicklook(grid.width, grid.height, go_class).get(),
+                               path);
 }
 
 }  // namespace

@@ -3,25 +3,27 @@
 #include <gdal_priv.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <stdexcept>
+#include <system_error>
 
-#include "server/geo/bitmap_font.h"
 #include "server/geo/gdal_util.h"
 #include "server/geo/products.h"
 
 namespace gonogo::geo::internal {
 namespace {
 
+namespace fs = std::filesystem;
+
 constexpr int kMaxMapSidePx = 1024;
 constexpr int kMinMapSidePx = 256;
 
-// Legend layout in pixels: text at twice the font size, one row per class.
-constexpr int kLegendScale = 2;
+// Legend layout in pixels: one row per class, a swatch and its label.
 constexpr int kLegendMarginPx = 8;
 constexpr int kLegendBoxPx = 16;
 constexpr int kLegendRowPitchPx = 24;
+constexpr double kLegendFontPx = 14.0;  // shrunk only if a label would not fit the panel
 
-constexpr Rgba kTransparent{0, 0, 0, 0};
 constexpr Rgba kPanelColour{255, 255, 255, 255};
 constexpr Rgba kOutlineColour{64, 64, 64, 255};
 constexpr Rgba kTextColour{0, 0, 0, 255};
@@ -33,16 +35,17 @@ struct LegendEntry {
 constexpr LegendEntry kLegend[] = {
     {kClassGo, "GO"}, {kClassSlowGo, "SLOW-GO"}, {kClassNoGo, "NO-GO"}, {kClassNoData, "no data"}};
 constexpr int kLegendRows = sizeof(kLegend) / sizeof(kLegend[0]);
+static_assert(kLegendMarginPx + kLegendRows * kLegendRowPitchPx == kQuicklookLegendHeightPx);
 
-int LegendWidthPx() {
-  int text_px = 0;
-  for (const LegendEntry& entry : kLegend) {
-    text_px = std::max(text_px, TextWidthPx(entry.label, kLegendScale));
-  }
-  return kLegendMarginPx + kLegendBoxPx + kLegendMarginPx + text_px + kLegendMarginPx;
+void SetSource(cairo_t* cr, Rgba c) {
+  cairo_set_source_rgba(cr, c.r / 255.0, c.g / 255.0, c.b / 255.0, c.a / 255.0);
 }
 
-int LegendHeightPx() { return kLegendMarginPx + kLegendRows * kLegendRowPitchPx; }
+void FillRect(cairo_t* cr, int x, int y, int w, int h, Rgba c) {
+  SetSource(cr, c);
+  cairo_rectangle(cr, x, y, w, h);
+  cairo_fill(cr);
+}
 
 // Class per map pixel (map_w x map_h): each map pixel takes the minimum over the grid cells it
 // covers, which is the most restrictive class (NO-GO 0 < SLOW-GO 1 < GO 2) and no data (255) only
@@ -72,19 +75,107 @@ std::vector<uint8_t> ResampleClasses(int width, int height, const std::vector<ui
   return map;
 }
 
-void DrawLegend(RgbaImage& image, int x0) {
-  image.Fill(x0, 0, image.width - x0, image.height, kPanelColour);
+// Writes the classes straight into the surface's pixels: one pixel per map cell, no resampling
+// by cairo. Class colours are opaque or fully transparent, so premultiplied equals straight.
+void PutMap(cairo_surface_t* surface, const std::vector<uint8_t>& map, int map_w, int map_h) {
+  cairo_surface_flush(surface);
+  unsigned char* data = cairo_image_surface_get_data(surface);
+  const int stride = cairo_image_surface_get_stride(surface);
+  for (int y = 0; y < map_h; ++y) {
+    auto* row = reinterpret_cast<uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < map_w; ++x) {
+      const Rgba c = ClassColour(map[static_cast<size_t>(y) * map_w + x]);
+      // CAIRO_FORMAT_ARGB32: one native-endian 32-bit word per pixel, alpha in the top byte.
+      row[x] = (uint32_t{c.a} << 24) | (uint32_t{c.r} << 16) | (uint32_t{c.g} << 8) | c.b;
+    }
+  }
+  cairo_surface_mark_dirty(surface);
+}
+
+// The white legend panel over the strip right of the map: a swatch and a label per class.
+void DrawLegend(cairo_t* cr, int x0, int image_width, int image_height) {
+  FillRect(cr, x0, 0, image_width - x0, image_height, kPanelColour);
+  const int text_x = x0 + kLegendMarginPx + kLegendBoxPx + kLegendMarginPx;
+  const double room_px = kQuicklookLegendWidthPx - (text_x - x0) - kLegendMarginPx;
+  SelectFont(cr, kLegendFontPx);
+  double widest_px = 0.0;
+  for (const LegendEntry& entry : kLegend) {
+    cairo_text_extents_t extents;
+    cairo_text_extents(cr, entry.label, &extents);
+    widest_px = std::max(widest_px, extents.x_advance);
+  }
+  if (widest_px > room_px) SelectFont(cr, kLegendFontPx * room_px / widest_px);
+  cairo_text_extents_t capital;
+  cairo_text_extents(cr, "H", &capital);  // centres the capitals on their swatch
   for (int i = 0; i < kLegendRows; ++i) {
     const int y = kLegendMarginPx + i * kLegendRowPitchPx;
     const int box_x = x0 + kLegendMarginPx;
-    image.Fill(box_x, y, kLegendBoxPx, kLegendBoxPx, kOutlineColour);
+    FillRect(cr, box_x, y, kLegendBoxPx, kLegendBoxPx, kOutlineColour);
     // No data is transparent on the map; over the white panel its swatch is white in an outline.
     const Rgba swatch =
         kLegend[i].go_class == kClassNoData ? kPanelColour : ClassColour(kLegend[i].go_class);
-    image.Fill(box_x + 1, y + 1, kLegendBoxPx - 2, kLegendBoxPx - 2, swatch);
-    const int text_y = y + (kLegendBoxPx - kGlyphHeight * kLegendScale) / 2;
-    DrawText(image, box_x + kLegendBoxPx + kLegendMarginPx, text_y, kLegend[i].label, kLegendScale,
-             kTextColour);
+    FillRect(cr, box_x + 1, y + 1, kLegendBoxPx - 2, kLegendBoxPx - 2, swatch);
+    SetSource(cr, kTextColour);
+    cairo_move_to(cr, text_x, y + kLegendBoxPx / 2.0 + capital.height / 2.0);
+    cairo_show_text(cr, kLegend[i].label);
+  }
+}
+
+// The straight (not premultiplied) RGBA bytes of an ARGB32 surface, row-major.
+std::vector<uint8_t> StraightRgba(cairo_surface_t* surface, int width, int height) {
+  cairo_surface_flush(surface);
+  const unsigned char* data = cairo_image_surface_get_data(surface);
+  const int stride = cairo_image_surface_get_stride(surface);
+  std::vector<uint8_t> rgba(static_cast<size_t>(width) * height * 4);
+  for (int y = 0; y < height; ++y) {
+    const auto* row = reinterpret_cast<const uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < width; ++x) {
+      const uint32_t p = row[x];
+      const uint32_t a = p >> 24;
+      uint8_t* out = &rgba[(static_cast<size_t>(y) * width + x) * 4];
+      for (int channel = 0; channel < 3; ++channel) {
+        const uint32_t premultiplied = (p >> (16 - 8 * channel)) & 0xff;
+        out[channel] = a == 0 ? 0 : static_cast<uint8_t>((premultiplied * 255 + a / 2) / a);
+      }
+      out[3] = static_cast<uint8_t>(a);
+    }
+  }
+  return rgba;
+}
+
+// RGBA PNG through GDAL's PNG driver, which always keeps the alpha band.
+void WriteRgbaPng(cairo_surface_t* surface, const std::string& path) {
+  EnsureGdalRegistered();
+  GdalErrorScope gdal_errors;
+  const int width = cairo_image_surface_get_width(surface);
+  const int height = cairo_image_surface_get_height(surface);
+  std::vector<uint8_t> rgba = StraightRgba(surface, width, height);
+  GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
+  GDALDriver* png = GetGDALDriverManager()->GetDriverByName("PNG");
+  if (mem == nullptr || png == nullptr) throw std::runtime_error("GDAL MEM or PNG driver missing");
+  GDALDatasetUniquePtr pixels(mem->Create("", width, height, 4, GDT_Byte, nullptr));
+  if (pixels == nullptr) throw std::runtime_error("cannot create the PNG image in memory");
+  const CPLErr written =
+      pixels->RasterIO(GF_Write, 0, 0, width, height, rgba.data(), width, height, GDT_Byte, 4,
+                       nullptr, 4, 4 * static_cast<GSpacing>(width), 1, nullptr);
+  if (written != CE_None) throw std::runtime_error("cannot fill the PNG image in memory");
+  pixels->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand);
+  const char* const options[] = {"ZLEVEL=6", nullptr};
+  GDALDatasetUniquePtr out(png->CreateCopy(path.c_str(), pixels.get(), FALSE,
+                                           const_cast<char**>(options), nullptr, nullptr));
+  if (out == nullptr) {
+    throw std::runtime_error("cannot write " + path + ": " + GdalErrorScope::LastMessage());
+  }
+}
+
+void WritePng(cairo_surface_t* surface, const std::string& path) {
+  if (cairo_image_surface_get_format(surface) == CAIRO_FORMAT_ARGB32) {
+    WriteRgbaPng(surface, path);
+    return;
+  }
+  const cairo_status_t status = cairo_surface_write_to_png(surface, path.c_str());
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error("cannot write " + path + ": " + cairo_status_to_string(status));
   }
 }
 
@@ -99,21 +190,42 @@ Rgba ClassColour(uint8_t go_class) {
     case kClassGo:
       return {26, 150, 65, 255};  // green
     default:
-      return kTransparent;
+      return {0, 0, 0, 0};  // transparent
   }
 }
 
-void RgbaImage::Fill(int x, int y, int w, int h, Rgba colour) {
-  const int x_end = std::min(width, x + w), y_end = std::min(height, y + h);
-  for (int row = std::max(0, y); row < y_end; ++row) {
-    for (int col = std::max(0, x); col < x_end; ++col) {
-      uint8_t* p = &pixels[(static_cast<size_t>(row) * width + col) * 4];
-      p[0] = colour.r;
-      p[1] = colour.g;
-      p[2] = colour.b;
-      p[3] = colour.a;
-    }
+CairoSurface NewImageSurface(cairo_format_t format, int width, int height) {
+  CairoSurface surface(cairo_image_surface_create(format, width, height));
+  const cairo_status_t status = cairo_surface_status(surface.get());
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error("cannot create a " + std::to_string(width) + " x " +
+                             std::to_string(height) +
+                             " px image: " + cairo_status_to_string(status));
   }
+  return surface;
+}
+
+CairoContext NewContext(cairo_surface_t* surface) {
+  CairoContext cr(cairo_create(surface));
+  const cairo_status_t status = cairo_status(cr.get());
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw std::runtime_error(std::string("cannot draw: ") + cairo_status_to_string(status));
+  }
+  return cr;
+}
+
+void SelectFont(cairo_t* cr, double size_px, bool bold) {
+  cairo_select_font_face(cr, kFontFamily, CAIRO_FONT_SLANT_NORMAL,
+                         bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, size_px);
+  // Greyscale antialiasing (no colour fringes from subpixel rendering) and slight hinting, so
+  // small text is sharp but keeps its shapes, whatever the machine's fontconfig says.
+  cairo_font_options_t* options = cairo_font_options_create();
+  cairo_font_options_set_antialias(options, CAIRO_ANTIALIAS_GRAY);
+  cairo_font_options_set_hint_style(options, CAIRO_HINT_STYLE_SLIGHT);
+  cairo_font_options_set_hint_metrics(options, CAIRO_HINT_METRICS_ON);
+  cairo_set_font_options(cr, options);
+  cairo_font_options_destroy(options);
 }
 
 void QuicklookMapSize(int width, int height, int* map_width_px, int* map_height_px) {
@@ -129,49 +241,33 @@ void QuicklookMapSize(int width, int height, int* map_width_px, int* map_height_
   *map_height_px = height * factor;
 }
 
-RgbaImage RenderQuicklook(int width, int height, const std::vector<uint8_t>& go_class) {
+CairoSurface RenderQuicklook(int width, int height, const std::vector<uint8_t>& go_class) {
   int map_w = 0, map_h = 0;
   QuicklookMapSize(width, height, &map_w, &map_h);
-  RgbaImage image;
-  image.width = map_w + LegendWidthPx();
-  image.height = std::max(map_h, LegendHeightPx());
-  image.pixels.assign(static_cast<size_t>(image.width) * image.height * 4, 0);  // transparent
-
-  const std::vector<uint8_t> map = ResampleClasses(width, height, go_class, map_w, map_h);
-  for (int y = 0; y < map_h; ++y) {
-    for (int x = 0; x < map_w; ++x) {
-      const Rgba c = ClassColour(map[static_cast<size_t>(y) * map_w + x]);
-      uint8_t* p = &image.pixels[(static_cast<size_t>(y) * image.width + x) * 4];
-      p[0] = c.r;
-      p[1] = c.g;
-      p[2] = c.b;
-      p[3] = c.a;
-    }
-  }
-  DrawLegend(image, map_w);
-  return image;
+  const int image_w = map_w + kQuicklookLegendWidthPx;
+  const int image_h = std::max(map_h, kQuicklookLegendHeightPx);
+  CairoSurface surface = NewImageSurface(CAIRO_FORMAT_ARGB32, image_w, image_h);  // transparent
+  PutMap(surface.get(), ResampleClasses(width, height, go_class, map_w, map_h), map_w, map_h);
+  CairoContext cr = NewContext(surface.get());
+  DrawLegend(cr.get(), map_w, image_w, image_h);
+  return surface;
 }
 
-void WritePng(const RgbaImage& image, const std::string& path, bool with_alpha) {
-  GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
-  GDALDriver* png = GetGDALDriverManager()->GetDriverByName("PNG");
-  if (mem == nullptr || png == nullptr) throw std::runtime_error("GDAL MEM or PNG driver missing");
-  const int bands = with_alpha ? 4 : 3;
-  GDALDatasetUniquePtr pixels(mem->Create("", image.width, image.height, bands, GDT_Byte, nullptr));
-  if (pixels == nullptr) throw std::runtime_error("cannot create the PNG image in memory");
-  // One call for all bands of the pixel-interleaved buffer (RGB takes the first three bytes of
-  // each pixel's four).
-  const CPLErr written = pixels->RasterIO(GF_Write, 0, 0, image.width, image.height,
-                                          const_cast<uint8_t*>(image.pixels.data()), image.width,
-                                          image.height, GDT_Byte, bands, nullptr, 4,
-                                          4 * static_cast<GSpacing>(image.width), 1, nullptr);
-  if (written != CE_None) throw std::runtime_error("cannot fill the PNG image in memory");
-  if (with_alpha) pixels->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand);
-  const char* const options[] = {"ZLEVEL=6", nullptr};
-  GDALDatasetUniquePtr out(png->CreateCopy(path.c_str(), pixels.get(), FALSE,
-                                           const_cast<char**>(options), nullptr, nullptr));
-  if (out == nullptr) {
-    throw std::runtime_error("cannot write " + path + ": " + GdalErrorScope::LastMessage());
+void WritePngAtomically(cairo_surface_t* surface, const std::string& path) {
+  const std::string partial = path + ".partial";
+  try {
+    WritePng(surface, partial);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    throw;
+  }
+  std::error_code renamed;
+  fs::rename(partial, path, renamed);
+  if (renamed) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    throw std::runtime_error("cannot write " + path + ": " + renamed.message());
   }
 }
 

@@ -1,6 +1,13 @@
 // WritePlotPng: image size for one and three panels, data confined to the plot area, points at the
-// pixels the documented layout gives, NaN breaks, dashes, bands, round ticks, legend and argument
-// checks.
+// pixels the documented layout gives, NaN breaks, dashes, bands, round ticks, legend, text set in
+// an antialiased outline font, and argument checks.
+//
+// Data lines, markers and bands are drawn without antialiasing (plot.cc), so the tests find them by
+// their exact colour and at exact pixels. Text is antialiased, so it is found by dark pixels rather
+// than pure black.
+//
+// To look at a realistic plot: GONOGO_PLOT_SAMPLE=/tmp/plot.png
+// build/tests/server/geo/geo_plot_test
 #include "server/geo/plot.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -36,6 +44,16 @@ struct RgbImage {
   bool Is(int x, int y, const std::array<uint8_t, 3>& c) const {
     const uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
     return p[0] == c[0] && p[1] == c[1] && p[2] == c[2];
+  }
+  // Ink of black text: a grey no lighter than 96 (antialiased glyphs are black only at their core).
+  bool IsDark(int x, int y) const {
+    const uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
+    return p[0] == p[1] && p[1] == p[2] && p[0] < 96;
+  }
+  // An antialiased edge of black text: a grey between ink and the white background.
+  bool IsGreyEdge(int x, int y) const {
+    const uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
+    return p[0] == p[1] && p[1] == p[2] && p[0] >= 96 && p[0] < 224;
   }
 };
 
@@ -94,6 +112,38 @@ PlotSeries Series(std::vector<double> x, std::vector<double> y, std::array<uint8
   s.y = std::move(y);
   s.rgb = rgb;
   return s;
+}
+
+// Bounding box of the dark pixels in [x0, x1) x [y0, y1), and how many there are.
+struct Ink {
+  int count = 0, left = 1 << 30, top = 1 << 30, right = -1, bottom = -1;  // right, bottom inclusive
+  int Width() const { return right - left + 1; }
+  int Height() const { return bottom - top + 1; }
+};
+
+Ink InkIn(const RgbImage& image, int x0, int y0, int x1, int y1) {
+  Ink ink;
+  for (int y = std::max(0, y0); y < std::min(image.height, y1); ++y) {
+    for (int x = std::max(0, x0); x < std::min(image.width, x1); ++x) {
+      if (!image.IsDark(x, y)) continue;
+      ++ink.count;
+      ink.left = std::min(ink.left, x);
+      ink.right = std::max(ink.right, x);
+      ink.top = std::min(ink.top, y);
+      ink.bottom = std::max(ink.bottom, y);
+    }
+  }
+  return ink;
+}
+
+int CountGreyEdges(const RgbImage& image, int x0, int y0, int x1, int y1) {
+  int count = 0;
+  for (int y = std::max(0, y0); y < std::min(image.height, y1); ++y) {
+    for (int x = std::max(0, x0); x < std::min(image.width, x1); ++x) {
+      count += image.IsGreyEdge(x, y);
+    }
+  }
+  return count;
 }
 
 int CountColour(const RgbImage& image, const std::array<uint8_t, 3>& c, int x0, int y0, int x1,
@@ -351,10 +401,91 @@ TEST(WritePlotPng, LegendListsLabelledSeriesOfTheFirstPanel) {
   EXPECT_GT(in_legend(kProbe), 20);
   EXPECT_EQ(in_legend(unlabelled), 0);
   EXPECT_EQ(in_legend(second_panel), 0);
-  // The label text is drawn (black) to the right of the sample line.
-  EXPECT_GT(CountColour(image, {0, 0, 0}, kPlotAreaLeftPx + 30, kPlotPanelHeightPx,
-                        kPlotAreaLeftPx + 90, image.height),
-            20);
+  // The label text is drawn (dark, antialiased) to the right of the sample line.
+  EXPECT_GT(
+      InkIn(image, kPlotAreaLeftPx + 30, kPlotPanelHeightPx, kPlotAreaLeftPx + 90, image.height)
+          .count,
+      20);
+}
+
+// The README's sample: three panels of traction against slip for three tyre scales.
+std::vector<PlotPanel> TractionPanels() {
+  const std::array<std::array<uint8_t, 3>, 3> colours = {
+      {{31, 119, 180}, {255, 127, 14}, {44, 160, 44}}};
+  const char* const titles[] = {"Drawbar pull", "Gross traction", "Tractive efficiency"};
+  const char* const y_labels[] = {"D/W", "T/(rW)", "efficiency (%)"};
+  const char* const labels[] = {"scale 0.25", "scale 0.5", "scale 1"};
+  std::vector<PlotPanel> panels(3);
+  for (int p = 0; p < 3; ++p) {
+    PlotPanel& panel = panels[p];
+    panel.title = titles[p];
+    panel.x_label = "slip s (-)";
+    panel.y_label = y_labels[p];
+    panel.x_min = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double scale = 0.25 * (1 << k);
+      std::vector<double> x, y;
+      for (int i = 0; i <= 14; ++i) {
+        const double slip = 0.05 * i;
+        const double pull = (0.6 - 0.05 * k) * (1 - std::exp(-slip / (0.06 * scale + 0.04)));
+        x.push_back(slip);
+        y.push_back(p == 0 ? pull - 0.05 : p == 1 ? pull + 0.1 : 100 * pull * (1 - slip));
+      }
+      panel.series.push_back(Series(x, y, colours[k], labels[k]));
+      if (k == 2) {
+        panel.series.back().markers = true;
+        PlotBand band;
+        band.x = x;
+        for (double v : y) {
+          band.lower.push_back(v * 0.9);
+          band.upper.push_back(v * 1.1);
+        }
+        band.rgb = {200, 235, 200};
+        panel.bands.push_back(band);
+      }
+    }
+  }
+  PlotSeries dashed = Series({0.0, 0.7}, {0.3, 0.3}, {44, 160, 44}, "1 sigma band (full scale)");
+  dashed.dashed = true;
+  panels[0].series.push_back(dashed);
+  return panels;
+}
+
+TEST(WritePlotPng, TextIsSetInAnAntialiasedOutlineFont) {
+  TempDir dir("geo_plot");
+  const std::string path = dir.path() + "/traction.png";
+  WritePlotPng(TractionPanels(), path);
+  if (const char* keep = std::getenv("GONOGO_PLOT_SAMPLE")) {
+    std::filesystem::copy_file(path, keep, std::filesystem::copy_options::overwrite_existing);
+  }
+  const RgbImage image = ReadPng(path);
+  ASSERT_EQ(image.width, 3 * kPlotPanelWidthPx);
+  for (int panel = 0; panel < 3; ++panel) {
+    const int left = panel * kPlotPanelWidthPx;
+    const Area area = PlotArea(panel);
+    // Title, above the frame: a line of 15 px bold type (capitals about 11 px, "p" and "y" reach
+    // below), far wider than tall, centred over the plot area. Antialiased glyph edges leave grey
+    // pixels, which a bitmap font would not.
+    const Ink title = InkIn(image, left, 0, left + kPlotPanelWidthPx, kPlotAreaTopPx - 1);
+    EXPECT_GT(title.count, 150) << "panel " << panel;
+    EXPECT_GE(title.Height(), 10) << "panel " << panel;
+    EXPECT_LE(title.Height(), 20) << "panel " << panel;
+    EXPECT_GT(title.Width(), 80) << "panel " << panel;
+    EXPECT_NEAR((title.left + title.right) / 2.0, (area.left + area.right) / 2.0, 4.0);
+    EXPECT_GT(CountGreyEdges(image, left, 0, left + kPlotPanelWidthPx, kPlotAreaTopPx - 1), 40);
+    // x tick labels and the x-axis label, below the frame: two lines of text, at least 11 px type.
+    const Ink below =
+        InkIn(image, area.left - 20, area.bottom + 6, area.right + 10, kPlotPanelHeightPx);
+    EXPECT_GE(below.Height(), 2 * 8) << "panel " << panel;
+    // The y label reads upwards: its ink, left of the tick labels, is taller than wide.
+    const Ink y_label = InkIn(image, left, area.top, left + 24, area.bottom);
+    EXPECT_GT(y_label.Height(), y_label.Width()) << "panel " << panel;
+    EXPECT_GE(y_label.Width(), 8) << "panel " << panel;
+  }
+  // Legend: one row of labels across most of the image width.
+  const Ink legend = InkIn(image, 0, kPlotPanelHeightPx, image.width, image.height);
+  EXPECT_GE(legend.Height(), 8);
+  EXPECT_GT(legend.Width(), 400);
 }
 
 TEST(WritePlotPng, RejectsBadArguments) {

@@ -1,12 +1,18 @@
 // WriteMapProducts: the COGs carry the grid's CRS and geotransform exactly, their nodata, palette,
 // legend and units, and pass GDAL's COG validator; the quicklook has the documented size and
-// legend.
+// legend, its labels set in an antialiased font.
+//
+// To look at a quicklook: GONOGO_QUICKLOOK_SAMPLE=/tmp/quicklook.png
+// build/tests/server/geo/geo_products_test --gtest_filter='*Quicklook*'
 #include "server/geo/products.h"
 
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 
@@ -202,8 +208,8 @@ std::array<int, 4> PixelAt(GDALDataset& png, int x, int y) {
 }
 
 TEST(WriteMapProducts, QuicklookHasDocumentedSizeColoursAndLegend) {
-  // Legend panel: 8 + 16 + 8 + width of "SLOW-GO" at scale 2 ((7 * 6 - 1) * 2 = 82) + 8 = 122 px
-  // wide, 8 + 4 * 24 = 104 px tall.
+  // Legend panel (quicklook.cc): 122 px wide, 8 + 4 * 24 = 104 px tall; rows of a 16 px swatch at
+  // x 8 and a label from x 32, the first at y 8.
   struct Case {
     int width, height, png_width, png_height;
   };
@@ -217,6 +223,11 @@ TEST(WriteMapProducts, QuicklookHasDocumentedSizeColoursAndLegend) {
     std::vector<float> speed;
     FillPattern(grid, &go_class, &speed);
     const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+    const char* keep = std::getenv("GONOGO_QUICKLOOK_SAMPLE");
+    if (keep != nullptr && c.width == 300) {
+      std::filesystem::copy_file(p.quicklook_png, keep,
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
     auto png = OpenForCheck(p.quicklook_png);
     ASSERT_NE(png, nullptr);
     EXPECT_STREQ(png->GetDriver()->GetDescription(), "PNG");
@@ -230,12 +241,31 @@ TEST(WriteMapProducts, QuicklookHasDocumentedSizeColoursAndLegend) {
     EXPECT_LT(red[1], 60);
     EXPECT_EQ(red[3], 255);
     EXPECT_EQ(PixelAt(*png, map_w - 1, 0)[3], 0);
-    // Legend text: some black pixels in the first label's row, right of its swatch.
-    int black = 0;
-    for (int y = 8; y < 8 + 16; ++y) {
-      for (int x = map_w + 32; x < map_w + 60; ++x) black += PixelAt(*png, x, y)[0] == 0;
+    // Swatches in the class colours: GO green, SLOW-GO amber, NO-GO red.
+    EXPECT_EQ(PixelAt(*png, map_w + 16, 16), (std::array<int, 4>{26, 150, 65, 255}));
+    EXPECT_EQ(PixelAt(*png, map_w + 16, 16 + 24), (std::array<int, 4>{255, 176, 0, 255}));
+    EXPECT_EQ(PixelAt(*png, map_w + 16, 16 + 48), (std::array<int, 4>{215, 25, 28, 255}));
+    // Each label is text: dark ink (grey, opaque) right of its swatch, with antialiased grey edges
+    // that a bitmap font would not have, spread over at least 9 rows (14 px type).
+    for (int row = 0; row < 4; ++row) {
+      int dark = 0, edge = 0, top = 1 << 30, bottom = -1;
+      for (int y = 8 + 24 * row - 2; y < 8 + 24 * row + 18; ++y) {
+        for (int x = map_w + 30; x < map_w + 122; ++x) {
+          const auto v = PixelAt(*png, x, y);
+          if (v[3] != 255 || v[0] != v[1] || v[1] != v[2]) continue;
+          if (v[0] < 96) {
+            ++dark;
+            top = std::min(top, y);
+            bottom = std::max(bottom, y);
+          } else if (v[0] < 224) {
+            ++edge;
+          }
+        }
+      }
+      EXPECT_GT(dark, 20) << "legend row " << row;
+      EXPECT_GT(edge, 5) << "legend row " << row;
+      EXPECT_GE(bottom - top + 1, 9) << "legend row " << row;
     }
-    EXPECT_GT(black, 10);
   }
 }
 

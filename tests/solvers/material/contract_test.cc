@@ -1,13 +1,15 @@
-// The contract of solvers/material/constitutive.h and point_store.h, checked on every model that
-// RegisterBuiltinMaterials registers (registry.Names()), built from its example parameters, with
-// the tolerances of TolerancesFor. Each check runs from
-// four states reached by a fixed sequence of increments: fresh; compressed and sheared (elastic
-// for the example parameters); on the Drucker-Prager cone after isochoric axial compression; at
-// the Drucker-Prager apex after isotropic extension (for linear-elastic the last two are elastic
-// states too).
+// The contract of solvers/material/constitutive.h and point_store.h, checked on every model of
+// ContractRegistry() (contract_registry.h: RegisterBuiltinMaterials plus the DE RVE of
+// solvers/dem/rve in a cheap configuration), built from its example parameters, with the
+// tolerances of TolerancesFor. Each check runs from four states reached by a fixed sequence of
+// increments: fresh; compressed and sheared (elastic for the example parameters); on the
+// Drucker-Prager cone after isochoric axial compression; at the Drucker-Prager apex after
+// isotropic extension (for linear-elastic the last two are elastic states too; the RVE reaches
+// "cone" with sliding contacts and "apex" by unloading to about 55 kPa).
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -24,35 +26,70 @@
 #include "solvers/material/linear_elastic.h"
 #include "solvers/material/point_store.h"
 #include "solvers/material/registry.h"
+#include "tests/solvers/material/contract_registry.h"
 
 namespace gonogo::material {
 namespace {
 
-
 // How closely a model must meet each check. A new model starts from the defaults; a row that
 // loosens one says why (an RVE's tangent is an estimate, a network's rotation is learnt ...).
 struct ContractTolerances {
-  double tangent_relative = 1e-5;          // (a) tangent vs central differences, Frobenius
-  double zero_increment_relative = 1e-12;  // (b) stress change under a zero increment
-  double rotation_relative = 1e-10;        // (c) Q sigma Q^T under a rigid rotation
-  double moduli_relative = 1e-12;          // (g) K and G of a fresh point
+  double tangent_relative = 1e-5;       // (a) tangent vs central differences, Frobenius
+  double difference_step = 1e-7;        // (a) strain step of the central differences
+  bool tangent_is_upper_bound = false;  // (a) also: each difference diagonal term <= tangent's
+  std::vector<std::string> bound_only_states;  // (a) path states where only the bound is checked
+  double zero_increment_relative = 1e-12;      // (b) stress change under a zero increment
+  double rotation_deg = 30;                    // (c) angle of the rigid rotation increment
+  double rotation_relative = 1e-10;            // (c) Q sigma Q^T under a rigid rotation
+  std::string rotation_skip_reason;            // (c) non-empty: why the model does not meet it
+  double moduli_relative = 1e-12;              // (g) K and G of a fresh point
+  int batch_points = 64;                       // (f) points in the batch
 };
 
 ContractTolerances TolerancesFor(const std::string& model_name) {
+  // The periodic DE RVE (solvers/dem/rve) in the cheap configuration of contract_registry.cc.
+  // The exact checks (d, e, f, h, i) hold as for any model: the DE run is deterministic and
+  // serial inside one RVE. The others compare a dynamic, discrete packing with continuum ideals.
+  ContractTolerances rve;
+  // (a) TangentPa() is the affine contact stiffness, which ignores how the grains relax. The
+  // affine field is kinematically admissible, so by minimum potential energy it bounds the
+  // relaxed stiffness from above (the Voigt bound, Hill 1952, Proc. Phys. Soc. A 65, 349):
+  // central differences (each a DE run of min_steps + relax_steps) must stay below it on the
+  // diagonal. Where the packing responds elastically (fresh, prestressed, and the "apex" state,
+  // which for the RVE is only unloading to about 55 kPa) they differ from it by 10-16 %
+  // (Frobenius, measured): 0.25 leaves room for round-off yet catches a tangent with the shear
+  // block doubled (tensor instead of engineering shears: 0.4, tried). On the "cone" path,
+  // where contacts slide, the relaxed response is 40-70 % of the affine estimate on the
+  // diagonal: only the bound is asserted there. Steps of 1e-6: far above the DE round-off, small
+  // enough that no contact opens or starts sliding.
+  rve.tangent_relative = 0.25;
+  rve.difference_step = 1e-6;
+  rve.tangent_is_upper_bound = true;
+  rve.bound_only_states = {"cone"};
+  // (b) a zero increment still runs min_steps + relax_steps DE steps, and the packing keeps
+  // settling (its unbalanced force is not zero): measured 0.9-1.3e-4 of the stress.
+  rve.zero_increment_relative = 1e-3;
+  // (c) not objective, as the engine stands (solvers/dem/rve/README.md, Limits): the RVE spreads
+  // dH at a constant velocity gradient, so a rotation by theta ends at exp(Q - I), which also
+  // contracts the plane normal to the axis by 1 - cos(theta); and the affine remap moves grain
+  // centres but does not spin the grains, so the skew part of dH slides every contact. At 0.5
+  // deg the stress is off by 1.5 % (fresh) to 7 % (cone) of its norm.
+  rve.rotation_skip_reason =
+      "the DE RVE is not objective under finite rotation increments (exp(dH) cell, grains not "
+      "spun by the skew part of dH); see solvers/dem/rve/README.md, Limits";
+  // (f) each point is a DE run; 16 keep the batch on two threads cheap.
+  rve.batch_points = 16;
   static const std::map<std::string, ContractTolerances> kByModel = {
       // Both integrate Hughes-Winget exactly and have closed-form tangents: the defaults.
       {"linear-elastic", ContractTolerances{}},
       {"drucker-prager", ContractTolerances{}},
+      {"dem-rve", rve},
   };
   const auto found = kByModel.find(model_name);
   return found == kByModel.end() ? ContractTolerances{} : found->second;
 }
 
-std::vector<std::string> BuiltinNames() {
-  MaterialRegistry registry;
-  RegisterBuiltinMaterials(registry);
-  return registry.Names();
-}
+std::vector<std::string> ContractNames() { return ContractRegistry().Names(); }
 
 Matrix3 StrainFromVoigt(double xx, double yy, double zz, double yz, double xz, double xy) {
   Vector6 voigt;
@@ -78,12 +115,14 @@ struct PathPoint {
 class MaterialContractTest : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
-    RegisterBuiltinMaterials(registry_);
+    registry_ = ContractRegistry();
     const ModelEntry& entry = registry_.Get(GetParam());
     model_ = entry.make(entry.example_parameters);
     tolerances_ = TolerancesFor(GetParam());
-    young_pa_ = entry.example_parameters.at("young_pa");
-    poisson_ = entry.example_parameters.at("poisson");
+    // Young's modulus of a fresh point, E = 9 K G / (3 K + G): the stress and stiffness scale of
+    // the checks, also for a model (the RVE) without elastic constants among its parameters.
+    const ElasticModuli moduli = model_->InitialElasticModuli();
+    young_pa_ = 9 * moduli.bulk_pa * moduli.shear_pa / (3 * moduli.bulk_pa + moduli.shear_pa);
     BuildPath();
   }
 
@@ -138,7 +177,6 @@ class MaterialContractTest : public ::testing::TestWithParam<std::string> {
   std::unique_ptr<ConstitutiveModel> model_;
   ContractTolerances tolerances_;
   double young_pa_ = 0;
-  double poisson_ = 0;
   std::vector<PathPoint> path_;
 };
 
@@ -152,7 +190,7 @@ TEST_P(MaterialContractTest, TangentMatchesCentralDifferences) {
     ASSERT_EQ(base.status, UpdateStatus::kOk) << base.reason;
     ASSERT_TRUE(base.has_tangent);
     const Vector6 strain = StrainToVoigt(point.next_strain);
-    const double step = 1e-7;
+    const double step = tolerances_.difference_step;
     Voigt6x6 differences;
     for (int j = 0; j < 6; ++j) {
       Vector6 plus = strain, minus = strain;
@@ -166,10 +204,19 @@ TEST_P(MaterialContractTest, TangentMatchesCentralDifferences) {
           (StressToVoigt(up.stress_pa) - StressToVoigt(down.stress_pa)) / (2 * step);
     }
     const double scale = std::max(base.tangent_pa.norm(), young_pa_);
-    EXPECT_LT((differences - base.tangent_pa).norm(), tolerances_.tangent_relative * scale)
-        << "tangent\n"
-        << base.tangent_pa << "\ndifferences\n"
-        << differences;
+    const std::vector<std::string>& skipped = tolerances_.bound_only_states;
+    if (std::find(skipped.begin(), skipped.end(), point.label) == skipped.end()) {
+      EXPECT_LT((differences - base.tangent_pa).norm(), tolerances_.tangent_relative * scale)
+          << "tangent\n"
+          << base.tangent_pa << "\ndifferences\n"
+          << differences;
+    }
+    if (tolerances_.tangent_is_upper_bound) {
+      // 2 %: the differences are of a dynamic run, not of a packing in exact equilibrium.
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_LE(differences(i, i), 1.02 * base.tangent_pa(i, i)) << "Voigt diagonal " << i;
+      }
+    }
     // Drucker-Prager: the path must reach the plastic branches, or (a) would only test C.
     if (GetParam() == "drucker-prager" && (point.label == "cone" || point.label == "apex")) {
       EXPECT_GT((base.tangent_pa - elastic).norm(), 0.1 * elastic.norm());
@@ -195,9 +242,10 @@ TEST_P(MaterialContractTest, ZeroIncrementKeepsTheStress) {
 
 // (c) Objectivity: a rigid rotation increment I + dH = Q gives Q sigma Q^T.
 TEST_P(MaterialContractTest, RigidRotationRotatesTheStress) {
-  const Matrix3 rotation =
-      Eigen::AngleAxisd(units::DegreesToRadians(30.0), Eigen::Vector3d(1, -2, 3).normalized())
-          .toRotationMatrix();
+  if (!tolerances_.rotation_skip_reason.empty()) GTEST_SKIP() << tolerances_.rotation_skip_reason;
+  const Matrix3 rotation = Eigen::AngleAxisd(units::DegreesToRadians(tolerances_.rotation_deg),
+                                             Eigen::Vector3d(1, -2, 3).normalized())
+                               .toRotationMatrix();
   for (const PathPoint& point : path_) {
     SCOPED_TRACE(point.label);
     const PointResponse response = Apply(*point.state, rotation - Matrix3::Identity(), false);
@@ -253,9 +301,9 @@ TEST_P(MaterialContractTest, SerializeRestoreRoundTripIsExact) {
   EXPECT_THROW(model_->RestoreState(bytes.substr(0, bytes.size() - 1)), InputError);
 }
 
-// (f) One batch of 64 points gives the bits of 64 single calls.
+// (f) One batch of points gives the bits of single calls (64 points; fewer for a costly model).
 TEST_P(MaterialContractTest, BatchEqualsSingleCalls) {
-  const int count = 64;
+  const int count = tolerances_.batch_points;
   std::vector<PointIncrement> batch(count);
   for (int i = 0; i < count; ++i) {
     const PathPoint& point = path_[i % path_.size()];
@@ -278,11 +326,19 @@ TEST_P(MaterialContractTest, BatchEqualsSingleCalls) {
   }
 }
 
-// (g) The moduli of a fresh point are those of its elastic constants.
+// (g) The moduli of a fresh point are those of its elastic constants. A model without elastic
+// constants among its parameters (the RVE: its moduli come from the contact tangent) must give
+// positive, finite ones.
 TEST_P(MaterialContractTest, InitialElasticModuliMatchTheElasticConstants) {
   const ElasticModuli moduli = model_->InitialElasticModuli();
-  const double bulk = young_pa_ / (3 * (1 - 2 * poisson_));
-  const double shear = young_pa_ / (2 * (1 + poisson_));
+  EXPECT_TRUE(std::isfinite(moduli.bulk_pa) && std::isfinite(moduli.shear_pa));
+  EXPECT_GT(moduli.bulk_pa, 0.0);
+  EXPECT_GT(moduli.shear_pa, 0.0);
+  const ParameterMap& parameters = registry_.Get(GetParam()).example_parameters;
+  if (parameters.count("young_pa") == 0 || parameters.count("poisson") == 0) return;
+  const double young_pa = parameters.at("young_pa"), poisson = parameters.at("poisson");
+  const double bulk = young_pa / (3 * (1 - 2 * poisson));
+  const double shear = young_pa / (2 * (1 + poisson));
   EXPECT_NEAR(moduli.bulk_pa, bulk, tolerances_.moduli_relative * bulk);
   EXPECT_NEAR(moduli.shear_pa, shear, tolerances_.moduli_relative * shear);
 }
@@ -358,7 +414,7 @@ TEST_P(MaterialContractTest, FailedTrialsCannotBeCommitted) {
   EXPECT_EQ(store->Serialize(handles[1]), fresh);  // the refused commit committed nothing
   store->Commit({handles[1]});
   EXPECT_NE(store->Serialize(handles[1]), fresh);
-  store->Discard(handles);  // nothing pending: fine
+  store->Discard(handles);                                      // nothing pending: fine
   EXPECT_THROW(store->Commit({handles[1]}), std::logic_error);  // a trial commits once
 
   EXPECT_THROW(store->TryUpdate({handles[0] + 100}, {good}, false), std::out_of_range);
@@ -369,7 +425,7 @@ TEST_P(MaterialContractTest, FailedTrialsCannotBeCommitted) {
 
 TEST_P(MaterialContractTest, NameIsTheRegisteredName) { EXPECT_EQ(model_->Name(), GetParam()); }
 
-INSTANTIATE_TEST_SUITE_P(Builtin, MaterialContractTest, ::testing::ValuesIn(BuiltinNames()),
+INSTANTIATE_TEST_SUITE_P(Registered, MaterialContractTest, ::testing::ValuesIn(ContractNames()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param;
                            for (char& c : name) c = (c == '-') ? '_' : c;
