@@ -17,6 +17,20 @@ using units::kPi;
 bool KeyLess(const NeighborPair& a, const NeighborPair& b) {
   return std::tie(a.i, a.j, a.key_shift) < std::tie(b.i, b.j, b.key_shift);
 }
+
+// R of the polar decomposition A = R U (A with det > 0, here near the identity): Newton's
+// iteration R <- (R + R^-T) / 2 (Higham 1986, SIAM J. Sci. Stat. Comput. 7, 1160), quadratic
+// from A; a handful of iterations reach round-off.
+Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& a) {
+  Eigen::Matrix3d rotation = a;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const Eigen::Matrix3d next = 0.5 * (rotation + rotation.inverse().transpose());
+    const double change = (next - rotation).norm();
+    rotation = next;
+    if (change <= 1e-15) break;
+  }
+  return rotation;
+}
 }  // namespace
 
 void SimulationParams::Validate() const {
@@ -64,6 +78,19 @@ void Simulation::SetVelocityGradient(const Eigen::Matrix3d& velocity_gradient_1_
   }
   velocity_gradient_1_s_ = velocity_gradient_1_s;
   deforming_ = deforming;
+  // The background spin of one step is the rotation of A = I + dt L. A symmetric L (every
+  // stretch path, and no deformation) has R = I exactly; it is left alone, so those paths keep
+  // the plain affine remap bit for bit.
+  spinning_ = deforming && velocity_gradient_1_s != velocity_gradient_1_s.transpose();
+  if (spinning_) {
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    step_rotation_ = PolarRotation(identity + time_step_s_ * velocity_gradient_1_s);
+    contact_velocity_gradient_1_s_ =
+        velocity_gradient_1_s - (step_rotation_ - identity) / time_step_s_;
+  } else {
+    step_rotation_.setIdentity();
+    contact_velocity_gradient_1_s_ = velocity_gradient_1_s;
+  }
 }
 
 Eigen::Matrix3i Simulation::ReduceCellEdges() {
@@ -217,8 +244,10 @@ inline bool Simulation::EvaluatePair(int k) {
       g.velocity_m_s[i] - g.velocity_m_s[j] -
       (kin.arm_i_m * g.angular_velocity_rad_s[i] + kin.arm_j_m * g.angular_velocity_rad_s[j])
           .cross(kin.normal);
-  // In a deforming cell the images move apart with the affine field as well.
-  if (deforming_) kin.contact_velocity_m_s += velocity_gradient_1_s_ * separation;
+  // In a deforming cell the images move apart with the affine field as well, less the rigid
+  // turn of the pair that the background spin of both grains follows (SetVelocityGradient):
+  // with a_i + a_j = |x_i - x_j|, -(a_i w + a_j w) x n = -w x (x_i - x_j) cancels the spin.
+  if (deforming_) kin.contact_velocity_m_s += contact_velocity_gradient_1_s_ * separation;
   kin.relative_spin_rad_s = g.angular_velocity_rad_s[i] - g.angular_velocity_rad_s[j];
   const ContactResult result = model_.Evaluate(kin, time_step_s_, pair_history_[k]);
   pair_normal_stiffness_n_m_[k] = result.normal_stiffness_n_m;
@@ -339,6 +368,19 @@ void Simulation::HalfKick() {
   }
 }
 
+void Simulation::RotateContactHistories() {
+  const int pair_count = static_cast<int>(pair_history_.size());
+  const Eigen::Matrix3d& rotation = step_rotation_;
+  // Each pair on its own: no races, the same result on any thread count.
+#pragma omp parallel for schedule(static) num_threads(params_.threads)
+  for (int k = 0; k < pair_count; ++k) {
+    if (pair_overlap_m_[k] == 0.0) continue;  // a cleared pair carries no history
+    ContactHistory& history = pair_history_[k];
+    history.tangential_displacement_m = rotation * history.tangential_displacement_m;
+    history.rolling_angle_rad = rotation * history.rolling_angle_rad;
+  }
+}
+
 void Simulation::Step() {
   if (!forces_valid_) ComputeForces();
   HalfKick();
@@ -348,6 +390,8 @@ void Simulation::Step() {
     // fluctuating drift.
     const Eigen::Matrix3d increment = time_step_s_ * velocity_gradient_1_s_;
     cell_.edges_m += increment * cell_.edges_m;
+    // The grains turn with the background spin, and their contacts' springs with them.
+    if (spinning_) RotateContactHistories();
 #pragma omp parallel for schedule(static) num_threads(params_.threads)
     for (int p = 0; p < n; ++p) {
       particles_.position_m[p] += increment * (particles_.position_m[p] - cell_.origin_m) +
@@ -371,6 +415,14 @@ void Simulation::Run(int steps) {
 int Simulation::ContactCount() const {
   int count = 0;
   for (double overlap : pair_overlap_m_) count += overlap > 0.0 ? 1 : 0;
+  return count;
+}
+
+int Simulation::SlidingContactCount() const {
+  int count = 0;
+  for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
+    count += pair_overlap_m_[k] > 0.0 && pair_tangential_stiffness_n_m_[k] == 0.0 ? 1 : 0;
+  }
   return count;
 }
 

@@ -52,11 +52,17 @@ class Simulation {
   void Run(int steps);
 
   // Deforms the cell at a constant velocity gradient L (1/s) from the next step on: each step maps
-  // the cell edges and the grains by (I + dt L), seed 000's X_{n+1} = X_n + dX_n spread over
-  // steps, and contact velocities include the affine part L (x_i - x_j). Velocities in
-  // particles() are relative to that affine field. Needs every axis periodic and no walls.
+  // the cell edges and the grains by A = I + dt L, seed 000's X_{n+1} = X_n + dX_n spread over
+  // steps. The background field also spins the grains with the rotation R of A (polar split
+  // A = R U) and turns every contact's stored springs by R, so contact velocities carry only the
+  // affine part that is not rigid: (L - (R - I) / dt) (x_i - x_j); a rigid rotation of the cell
+  // slides no contact. Velocities and angular velocities in particles() are relative to that
+  // background (affine translation, spin). A symmetric L has R = I: the pure-stretch path is the
+  // plain affine remap. Needs every axis periodic and no walls (solvers/dem/rve/README.md).
   void SetVelocityGradient(const Eigen::Matrix3d& velocity_gradient_1_s);
   const Eigen::Matrix3d& velocity_gradient_1_s() const { return velocity_gradient_1_s_; }
+  // R of the polar split of I + dt L: the background spin of one step (I unless L is skew-free).
+  const Eigen::Matrix3d& step_rotation() const { return step_rotation_; }
   const Cell& cell() const { return cell_; }
 
   // Contact virial W = sum over contacts of (x_i - x_j) (x) f_i (N m), from the last force
@@ -81,6 +87,8 @@ class Simulation {
   // Times the cell edges were replaced by an equivalent, less sheared set (reduce_sheared_cell).
   int cell_reduction_count() const { return cell_reduction_count_; }
   int ContactCount() const;
+  // Contacts whose tangential force is at the Coulomb limit at the last force evaluation.
+  int SlidingContactCount() const;
   // Mean |net force| over grains / mean |contact force| over contacts (0 when there are none):
   // the usual quasi-static equilibrium measure (e.g. Ng 2006; 1e-3 or below is static).
   double UnbalancedForceRatio() const;
@@ -108,6 +116,8 @@ class Simulation {
   void SumParticleForces();
   Vec3 WallForce(int p, int w, Vec3& torque_n_m);
   void HalfKick();
+  // Turns every contact's tangential and rolling history by step_rotation_ (the background spin).
+  void RotateContactHistories();
 
   SimulationParams params_;
   Particles particles_;
@@ -115,6 +125,11 @@ class Simulation {
   Cell cell_;
   Eigen::Matrix3d velocity_gradient_1_s_ = Eigen::Matrix3d::Zero();
   bool deforming_ = false;
+  // The background spin (SetVelocityGradient): R of I + dt L, whether R != I, and the gradient
+  // that enters contact velocities, L - (R - I) / dt (= L when R = I).
+  Eigen::Matrix3d step_rotation_ = Eigen::Matrix3d::Identity();
+  bool spinning_ = false;
+  Eigen::Matrix3d contact_velocity_gradient_1_s_ = Eigen::Matrix3d::Zero();
   NeighborList neighbors_;
   double time_step_s_ = 0.0;
   double time_s_ = 0.0;

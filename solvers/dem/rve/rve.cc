@@ -1,8 +1,11 @@
 #include "solvers/dem/rve/rve.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <random>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <utility>
 #include <vector>
 
@@ -243,23 +246,77 @@ void Rve::Run(const MixedControl& control, int steps) {
   simulation_->SetVelocityGradient(Matrix3::Zero());
 }
 
+std::string Rve::IncrementProblem(const Matrix3& displacement_gradient_increment) {
+  if (!displacement_gradient_increment.allFinite()) return "the increment is not finite";
+  // A real logarithm of F = I + dH (and so a real root F^(1/n)) exists when no real eigenvalue
+  // of F is <= 0 (the principal logarithm; Higham 2008, Functions of Matrices, ch. 1 and 11).
+  const Matrix3 deformation = Matrix3::Identity() + displacement_gradient_increment;
+  const Eigen::EigenSolver<Matrix3> solver(deformation, false);
+  for (int k = 0; k < 3; ++k) {
+    const std::complex<double> lambda = solver.eigenvalues()[k];
+    const bool real = std::abs(lambda.imag()) <= 1e-12 * std::max(1.0, std::abs(lambda));
+    if (real && lambda.real() <= 0.0) {
+      return "I + dH has the eigenvalue " + std::to_string(lambda.real()) + " (det " +
+             std::to_string(deformation.determinant()) +
+             "): no real logarithm; the increment inverts or flattens the cell, or turns it "
+             "by half a turn";
+    }
+  }
+  return "";
+}
+
+double Rve::IncrementStrain(const Matrix3& displacement_gradient_increment) {
+  const Matrix3& dh = displacement_gradient_increment;
+  if (dh == dh.transpose()) return dh.cwiseAbs().maxCoeff();  // F = U
+  // U = sqrt(F^T F) from the eigen-decomposition of the right Cauchy-Green tensor.
+  const Matrix3 deformation = Matrix3::Identity() + dh;
+  const Eigen::SelfAdjointEigenSolver<Matrix3> solver(deformation.transpose() * deformation);
+  const Matrix3 stretch = solver.eigenvectors() *
+                          solver.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+                          solver.eigenvectors().transpose();
+  return (stretch - Matrix3::Identity()).cwiseAbs().maxCoeff();
+}
+
 void Rve::ApplyIncrement(const Matrix3& displacement_gradient_increment, int min_steps,
                          int relax_steps) {
-  Require(displacement_gradient_increment.allFinite(), "displacement_gradient_increment",
-          "must be finite");
+  const std::string problem = IncrementProblem(displacement_gradient_increment);
+  Require(problem.empty(), "displacement_gradient_increment", problem);
   const double dt_s = simulation_->time_step_s();
-  const double largest = 0.5 * (displacement_gradient_increment +
-                                displacement_gradient_increment.transpose())
-                                   .cwiseAbs()
-                                   .maxCoeff();
-  const int steps = std::max(
-      std::max(min_steps, 1), static_cast<int>(std::ceil(largest / (StableRate1S() * dt_s))));
-  const Matrix3 rate_1_s = displacement_gradient_increment / (steps * dt_s);
-  simulation_->SetVelocityGradient(rate_1_s);
-  for (int s = 0; s < steps; ++s) {
-    simulation_->Step();
-    strain_ += 0.5 * (rate_1_s + rate_1_s.transpose()) * dt_s;
+  const Matrix3& dh = displacement_gradient_increment;
+  const int steps =
+      std::max(std::max(min_steps, 1),
+               static_cast<int>(std::ceil(IncrementStrain(dh) / (StableRate1S() * dt_s))));
+  // Each step maps the cell by A = F^(1/n) = exp(log(F) / n), F = I + dH, so that the n steps
+  // end at exactly F H_0 (a constant L = dH / (n dt) would end at (I + dH / n)^n ~ exp(dH):
+  // for a rotation by theta, a cell also shrunk by 1 - cos(theta) across the axis). The engine
+  // maps by I + dt L, hence L = (A - I) / dt. A symmetric F takes its root from its
+  // eigen-decomposition, exactly symmetric, so that a stretch stays free of spin.
+  const Matrix3 identity = Matrix3::Identity();
+  Matrix3 step_change = Matrix3::Zero(), log_deformation = Matrix3::Zero();  // A - I, log F
+  if (dh == dh.transpose()) {
+    if (!dh.isZero(0.0)) {
+      // F = V (I + M) V^T from dH = V M V^T: log1p and expm1 keep small strains exact.
+      const Eigen::SelfAdjointEigenSolver<Matrix3> solver(dh);
+      const Matrix3& v = solver.eigenvectors();
+      Eigen::Vector3d log_stretch, root_change;
+      for (int k = 0; k < 3; ++k) {
+        log_stretch[k] = std::log1p(solver.eigenvalues()[k]);
+        root_change[k] = std::expm1(log_stretch[k] / steps);
+      }
+      log_deformation = v * log_stretch.asDiagonal() * v.transpose();
+      step_change = v * root_change.asDiagonal() * v.transpose();
+      log_deformation = (0.5 * (log_deformation + log_deformation.transpose())).eval();
+      step_change = (0.5 * (step_change + step_change.transpose())).eval();
+    }
+  } else {
+    log_deformation = (identity + dh).log();
+    step_change = (log_deformation / steps).exp() - identity;
   }
+  const Matrix3 rate_1_s = step_change / dt_s;
+  simulation_->SetVelocityGradient(rate_1_s);
+  simulation_->Run(steps);
+  // Logarithmic strain of the increment; its symmetric part is zero for a rigid rotation.
+  strain_ += 0.5 * (log_deformation + log_deformation.transpose());
   simulation_->SetVelocityGradient(Matrix3::Zero());
   simulation_->Run(relax_steps);
 }

@@ -55,7 +55,9 @@ struct MixedControl {
 
 struct RveSnapshot {
   double time_s = 0.0;
-  Matrix3 strain = Matrix3::Zero();     // accumulated sum of sym(L) dt since consolidation
+  // Accumulated since consolidation: sum of sym(L) dt over servo steps (Run) plus
+  // sym(log(I + dH)) per increment (ApplyIncrement; zero for a rigid rotation).
+  Matrix3 strain = Matrix3::Zero();
   Matrix3 stress_pa = Matrix3::Zero();  // homogenised Cauchy, symmetric part
   double volume_m3 = 0.0;
   double solid_fraction = 0.0;
@@ -74,10 +76,21 @@ class Rve {
 
   // Runs `steps` steps under mixed control.
   void Run(const MixedControl& control, int steps);
-  // Applies a displacement-gradient increment dH to the cell over enough steps to respect the
-  // inertial-number cap (at least min_steps), then `relax_steps` with the cell fixed.
+  // Applies a displacement-gradient increment dH to the cell over n steps, enough to respect the
+  // inertial-number cap on its stretch (IncrementStrain) and at least min_steps, then
+  // `relax_steps` with the cell fixed. Each step maps the cell by A = (I + dH)^(1/n), so the cell
+  // ends at exactly (I + dH) H_0; the rotation part spins the grains and their contacts with it
+  // (Simulation::SetVelocityGradient), so a rigid rotation Q gives Q sigma Q^T. Throws
+  // InputError if dH is not finite or I + dH has no real logarithm (IncrementProblem).
   void ApplyIncrement(const Matrix3& displacement_gradient_increment, int min_steps,
                       int relax_steps);
+  // Why ApplyIncrement cannot take dH (empty if it can): not finite, or I + dH has a real
+  // eigenvalue <= 0 (det <= 0: the cell would be inverted or flattened; or a half turn).
+  static std::string IncrementProblem(const Matrix3& displacement_gradient_increment);
+  // The stretch of an increment, rotation-free: the largest |component| of U - I with
+  // I + dH = R U (polar split; Biot strain). For a symmetric dH that is |dH|_max itself.
+  // Needs IncrementProblem(dH) empty.
+  static double IncrementStrain(const Matrix3& displacement_gradient_increment);
 
   // Homogenised Cauchy stress, symmetric part (Pa): sigma = -(1/V) sum_c d^c (x) f^c with d^c
   // from the grain to its neighbour (seed 000), at the last step.

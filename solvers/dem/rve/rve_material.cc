@@ -49,8 +49,13 @@ material::PointResponse RveMaterial::UpdateOne(const material::PointIncrement& i
     response.reason = "displacement_gradient_increment is not finite";
     return response;
   }
-  const double largest =
-      (0.5 * (increment_gradient + increment_gradient.transpose())).cwiseAbs().maxCoeff();
+  const std::string problem = Rve::IncrementProblem(increment_gradient);
+  if (!problem.empty()) {
+    response.reason = "displacement_gradient_increment: " + problem;
+    return response;
+  }
+  // The stretch alone counts: a rigid rotation of any size strains nothing.
+  const double largest = Rve::IncrementStrain(increment_gradient);
   if (largest > params_.max_strain_increment) {
     response.reason = "strain increment " + std::to_string(largest) + " exceeds " +
                       std::to_string(params_.max_strain_increment) + "; cut the step";

@@ -13,11 +13,13 @@
 namespace gonogo::dem::rve {
 
 struct RveMaterialParams {
-  RveParams rve;                       // the template RVE every point starts from
-  int min_steps_per_increment = 20;    // DE steps spreading one increment (more if the rate cap asks)
-  int relax_steps = 50;                // DE steps with the cell fixed after the increment
-  double max_strain_increment = 0.01;  // larger |sym(dH)| components are refused (cut the step)
-  int batch_threads = 1;               // OpenMP threads over the points of a batch
+  RveParams rve;                     // the template RVE every point starts from
+  int min_steps_per_increment = 20;  // DE steps spreading one increment (more if the rate cap asks)
+  int relax_steps = 50;              // DE steps with the cell fixed after the increment
+  // Larger components of the increment's stretch U - I (I + dH = R U, Rve::IncrementStrain) are
+  // refused (cut the step); the rotation R may be of any size short of a half turn.
+  double max_strain_increment = 0.01;
+  int batch_threads = 1;  // OpenMP threads over the points of a batch
 
   void Validate() const;
 };

@@ -69,14 +69,14 @@ ContractTolerances TolerancesFor(const std::string& model_name) {
   // (b) a zero increment still runs min_steps + relax_steps DE steps, and the packing keeps
   // settling (its unbalanced force is not zero): measured 0.9-1.3e-4 of the stress.
   rve.zero_increment_relative = 1e-3;
-  // (c) not objective, as the engine stands (solvers/dem/rve/README.md, Limits): the RVE spreads
-  // dH at a constant velocity gradient, so a rotation by theta ends at exp(Q - I), which also
-  // contracts the plane normal to the axis by 1 - cos(theta); and the affine remap moves grain
-  // centres but does not spin the grains, so the skew part of dH slides every contact. At 0.5
-  // deg the stress is off by 1.5 % (fresh) to 7 % (cone) of its norm.
-  rve.rotation_skip_reason =
-      "the DE RVE is not objective under finite rotation increments (exp(dH) cell, grains not "
-      "spun by the skew part of dH); see solvers/dem/rve/README.md, Limits";
+  // (c) the default 30 deg rotation about an oblique axis. The RVE maps its cell by
+  // (I + dH)^(1/n) each step and spins grains and contact springs with the rotation
+  // (solvers/dem/rve/README.md, "Increments"), so Q sigma Q^T holds up to what the packing does
+  // anyway in the 20 + 30 DE steps: measured 1e-5 (fresh, prestressed) to 9e-5 (cone, apex) of
+  // the stress norm, the size of the settling under a zero increment (b). It was 1.5-7 % at
+  // 0.5 deg before the fix. The bound is (b)'s: the reference is the committed stress, and the
+  // packing keeps settling while it turns.
+  rve.rotation_relative = 1e-3;
   // (f) each point is a DE run; 16 keep the batch on two threads cheap.
   rve.batch_points = 16;
   static const std::map<std::string, ContractTolerances> kByModel = {
