@@ -35,6 +35,7 @@
 #include <string>
 
 #include "solvers/dem/simulation.h"
+#include "solvers/common/cli_checks.h"
 
 namespace {
 
@@ -56,17 +57,8 @@ struct Options {
 constexpr int kWarmupSteps = 10;
 
 // A count of at least 1, and a finite number >= 0 (CLI11's own NonNegativeNumber takes "nan").
-const CLI::Validator kAtLeastOne =
-    CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
-const CLI::Validator kNonNegative(
-    [](std::string& text) {
-      double value = 0;
-      if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || value < 0.0) {
-        return "needs a finite number >= 0, got '" + text + "'";
-      }
-      return std::string();
-    },
-    ">= 0", "NON_NEGATIVE");
+const CLI::Validator kAtLeastOne = gonogo::cli_checks::AtLeastOne();
+const CLI::Validator kNonNegative = gonogo::cli_checks::FiniteNumber(0.0);
 
 // Returns the options, or the exit code when the program should stop here: 0 after --help, 2 on a
 // usage error (unknown or mistyped option, value out of range), with the message on stderr.

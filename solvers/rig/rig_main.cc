@@ -27,21 +27,14 @@
 #include "solvers/rig/bevameter.h"
 #include "solvers/rig/fe_soils.h"
 #include "solvers/rig/wheel_rig.h"
+#include "solvers/common/cli_checks.h"
 
 namespace {
 
 using namespace gonogo;
 
 // The numbers the rig reads must be finite (CLI11 alone takes "nan" and "inf").
-const CLI::Validator kFinite(
-    [](std::string& text) {
-      double value = 0;
-      if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value)) {
-        return "needs a finite number, got '" + text + "'";
-      }
-      return std::string();
-    },
-    "", "FINITE");
+const CLI::Validator kFinite = gonogo::cli_checks::FiniteNumber();
 
 struct CommandLine {
   std::string soil_name;

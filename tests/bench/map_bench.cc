@@ -22,6 +22,7 @@
 #include "cache/curve_store.h"
 #include "cache/database.h"
 #include "server_process.h"
+#include "solvers/common/cli_checks.h"
 
 using namespace gonogo;
 using namespace gonogo::testing;
@@ -118,8 +119,7 @@ int main(int argc, char** argv) {
       "plan, traction tasks, cell evaluation, products, download) twice: cold cache, then warm. "
       "Then times traction-curve lookups in the SQLite cache that the cold run filled.",
       "gonogo-bench-map");
-  const CLI::Validator at_least_one =
-      CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
+  const CLI::Validator at_least_one = gonogo::cli_checks::AtLeastOne();
   app.add_option("--size", size, "cells per side of the sample terrain")
       ->check(at_least_one)
       ->capture_default_str();

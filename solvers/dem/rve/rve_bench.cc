@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "solvers/dem/rve/rve_material.h"
+#include "solvers/common/cli_checks.h"
 
 int main(int argc, char** argv) {
   int rves = 64, grains = 500, steps = 2000, threads = 2;
@@ -20,8 +21,7 @@ int main(int argc, char** argv) {
       "same small increment through the constitutive seam (one RVE per thread, the grains of an "
       "RVE on one thread), S DE steps per RVE. Prints figures only; not a test.",
       "gonogo-rve-bench");
-  const CLI::Validator at_least_one =
-      CLI::Range(1, std::numeric_limits<int>::max()).description(">= 1");
+  const CLI::Validator at_least_one = gonogo::cli_checks::AtLeastOne();
   app.add_option("--rves", rves, "RVEs R in the batch")->check(at_least_one)->capture_default_str();
   app.add_option("--grains", grains, "grains N per RVE")
       ->check(at_least_one)

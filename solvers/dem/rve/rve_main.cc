@@ -24,6 +24,7 @@
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
 #include "solvers/dem/rve/rve.h"
+#include "solvers/common/cli_checks.h"
 
 namespace {
 
@@ -43,15 +44,7 @@ struct Options {
 };
 
 // The numbers the RVE reads must be finite (CLI11 alone takes "nan" and "inf").
-const CLI::Validator kFinite(
-    [](std::string& text) {
-      double value = 0;
-      if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value)) {
-        return "needs a finite number, got '" + text + "'";
-      }
-      return std::string();
-    },
-    "", "FINITE");
+const CLI::Validator kFinite = gonogo::cli_checks::FiniteNumber();
 
 // Fills `options`, or returns the exit code when the program should stop here: 0 after --help, 2
 // on a usage error (unknown or mistyped option, value out of range), with the message on stderr.
