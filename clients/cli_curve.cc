@@ -15,10 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Curves expected to take this long go through SubmitCurve (the server refuses to compute them
-// inside one RPC: server/curve_resolver.h kLongQuerySeconds).
-constexpr double kLongCurveSeconds = 60.0;
-
 struct CurveOptions {
   std::string tier;
   WheelOptions wheel;
@@ -39,16 +35,16 @@ struct ScalabilityOptions {
   std::string out_dir;
 };
 
-// The server's scheduling estimate of one curve of `tier`, s; 0 when the tier is unknown (the
-// curve query then reports it).
-double TierExpectedSeconds(Client& client, const std::string& tier) {
+// Whether the server computes curves of `tier` only as jobs (SubmitCurve); false when the tier is
+// unknown (the curve query then reports it).
+bool CurvesAreJobs(Client& client, const std::string& tier) {
   grpc::ClientContext ctx;
   v1::ListTiersResponse resp;
-  if (!client.stub().ListTiers(&ctx, v1::ListTiersRequest{}, &resp).ok()) return 0;
+  if (!client.stub().ListTiers(&ctx, v1::ListTiersRequest{}, &resp).ok()) return false;
   for (const auto& t : resp.tiers()) {
-    if (t.name() == tier) return t.expected_seconds();
+    if (t.name() == tier) return t.curves_are_jobs();
   }
-  return 0;
+  return false;
 }
 
 // A curve that takes minutes is a job: submitted, watched with a progress bar, then fetched.
@@ -137,7 +133,7 @@ int RunCurve(Client& client, const CurveOptions& o) {
   WheelFromOptions(o.wheel, req.mutable_tyre(), &load);
   req.set_wheel_load_n(load);
   v1::TractionCurve curve;
-  if (o.job || TierExpectedSeconds(client, req.tier()) >= kLongCurveSeconds) {
+  if (o.job || CurvesAreJobs(client, req.tier())) {
     const int rc = CurveAsJob(client, req, o.no_wait, &curve);
     if (rc != kExitOk || o.no_wait) return rc;
   } else {

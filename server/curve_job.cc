@@ -39,22 +39,14 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
   std::mutex status_mutex;  // the solver's progress arrives on a pool thread
   v1::JobStatus status = StatusOf(rec);
   auto last_persist = std::chrono::steady_clock::now();
+  // Persisted at most every 250 ms: the solver may report often.
   auto report = [&](double fraction, const std::string& message, bool force) {
     std::lock_guard<std::mutex> lock(status_mutex);
-    status.set_state(v1::JOB_STATE_RUNNING);
     status.set_fraction_done(fraction);
-    status.set_message(message);
-    Publish(id, status);
     const auto now = std::chrono::steady_clock::now();
-    if (force || now - last_persist > std::chrono::milliseconds(250)) {
-      last_persist = now;
-      jobs_.SetProgress(id, {fraction, status.tasks_done(), status.tasks_total(),
-                             status.cache_hits(), status.similarity_hits(), message});
-    }
-  };
-  auto finish = [&](cache::JobState state, const std::string& message, const std::string& summary,
-                    const std::vector<std::string>& products) {
-    Finish(id, state, message, summary, products);
+    const bool persist = force || now - last_persist > std::chrono::milliseconds(250);
+    if (persist) last_persist = now;
+    ReportProgress(id, status, message, persist);
   };
   try {
     jobs_.SetState(id, cache::JobState::kRunning, "looking up the cache");
@@ -86,28 +78,24 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
       std::lock_guard<std::mutex> lock(mutex_);
       stopping = stopping_;
     }
-    if (live->cancel_requested) return finish(cache::JobState::kCancelled, "cancelled", "", {});
+    if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
     if (stopping && answer.source == CurveSource::kCancelled) {
       jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
       spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
       return;
     }
     if (!answer.ok()) {
-      return finish(cache::JobState::kFailed,
+      return Finish(id, cache::JobState::kFailed,
                     std::string(ErrorKindName(answer.error_kind)) + ": " + answer.error, "", {});
     }
     if (!answer.curve.immobile_reason.empty()) {
-      return finish(cache::JobState::kFailed,
+      return Finish(id, cache::JobState::kFailed,
                     std::string(ErrorKindName(ErrorKind::kCannotCarry)) + ": " +
                         answer.curve.immobile_reason,
                     "", {});
     }
     v1::TractionCurve curve;
-    if (answer.cached) {
-      FillAnswer(task.request, *answer.cached, &curve);
-    } else {
-      FillCurve(answer.stored, false, &curve);
-    }
+    FillResolved(task.request, answer, &curve);
     std::string json;
     google::protobuf::util::JsonPrintOptions json_options;
     json_options.add_whitespace = true;
@@ -132,9 +120,9 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
       status.set_similarity_hits(answer.source == CurveSource::kCacheSimilar ? 1 : 0);
       jobs_.SetProgress(id, {1.0, 1, 1, status.cache_hits(), status.similarity_hits(), "done"});
     }
-    finish(cache::JobState::kDone, "done", json, {"curve.csv", "curve.json"});
+    Finish(id, cache::JobState::kDone, "done", json, {"curve.csv", "curve.json"});
   } catch (const std::exception& e) {
-    finish(cache::JobState::kFailed, e.what(), "", {});
+    Finish(id, cache::JobState::kFailed, e.what(), "", {});
   }
 }
 

@@ -149,4 +149,13 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
   return out;
 }
 
+void FillResolved(const TractionRequest& request, const Resolution& answer,
+                  v1::TractionCurve* out) {
+  if (answer.cached) {
+    FillAnswer(request, *answer.cached, out);
+  } else {
+    FillCurve(answer.stored, false, out);
+  }
+}
+
 }  // namespace gonogo::server

@@ -93,4 +93,8 @@ class CurveResolver {
   std::atomic<uint64_t> next_task_id_{1};
 };
 
+// The API form of a resolved curve answering `request` (an exact or similarity hit with its
+// provenance, or a freshly computed curve). `answer` must be ok().
+void FillResolved(const TractionRequest& request, const Resolution& answer, v1::TractionCurve* out);
+
 }  // namespace gonogo::server

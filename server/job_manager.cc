@@ -216,6 +216,17 @@ void JobManager::Loop() {
   }
 }
 
+void JobManager::ReportProgress(const std::string& id, v1::JobStatus& status,
+                                const std::string& message, bool persist) {
+  status.set_state(v1::JOB_STATE_RUNNING);
+  status.set_message(message);
+  Publish(id, status);
+  if (persist) {
+    jobs_.SetProgress(id, {status.fraction_done(), status.tasks_done(), status.tasks_total(),
+                           status.cache_hits(), status.similarity_hits(), message});
+  }
+}
+
 void JobManager::Finish(const std::string& id, cache::JobState state, const std::string& message,
                         const std::string& summary, const std::vector<std::string>& products) {
   jobs_.Finish(id, state, message, summary, products, NowMs());
@@ -279,11 +290,7 @@ v1::Job JobManager::Cancel(const std::string& id) {
       queued = true;
     }
   }
-  if (queued) {
-    jobs_.Finish(id, cache::JobState::kCancelled, "cancelled before it started", "", {}, NowMs());
-    auto after = jobs_.Get(id);
-    Publish(id, StatusOf(*after));
-  }
+  if (queued) Finish(id, cache::JobState::kCancelled, "cancelled before it started", "", {});
   changed_.notify_all();
   return *GetJob(id);
 }
@@ -321,17 +328,7 @@ void JobManager::RunJob(const std::string& id) {
   const auto started = std::chrono::steady_clock::now();
   v1::JobStatus status = StatusOf(*rec);
   auto report = [&](const std::string& message, bool persist) {
-    status.set_state(v1::JOB_STATE_RUNNING);
-    status.set_message(message);
-    Publish(id, status);
-    if (persist) {
-      jobs_.SetProgress(id, {status.fraction_done(), status.tasks_done(), status.tasks_total(),
-                             status.cache_hits(), status.similarity_hits(), message});
-    }
-  };
-  auto finish = [&](cache::JobState state, const std::string& message, const std::string& summary,
-                    const std::vector<std::string>& products) {
-    Finish(id, state, message, summary, products);
+    ReportProgress(id, status, message, persist);
   };
 
   try {
@@ -415,8 +412,8 @@ void JobManager::RunJob(const std::string& id) {
       std::lock_guard<std::mutex> lock(mutex_);
       stopping = stopping_;
     }
-    if (live->cancel_requested) return finish(cache::JobState::kCancelled, "cancelled", "", {});
-    if (!failure.empty()) return finish(cache::JobState::kFailed, failure, "", {});
+    if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
+    if (!failure.empty()) return Finish(id, cache::JobState::kFailed, failure, "", {});
     if (stopping) {
       jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
       spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
@@ -440,10 +437,10 @@ void JobManager::RunJob(const std::string& id) {
                           ProductMetadata(si), out_dir.string());
     std::ofstream(out_dir / "summary.json") << summary << "\n";
     status.set_fraction_done(1.0);
-    finish(cache::JobState::kDone, "done", summary,
+    Finish(id, cache::JobState::kDone, "done", summary,
            {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"});
   } catch (const std::exception& e) {
-    finish(cache::JobState::kFailed, e.what(), "", {});
+    Finish(id, cache::JobState::kFailed, e.what(), "", {});
   }
 }
 

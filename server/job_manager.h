@@ -94,6 +94,10 @@ class JobManager {
   // Persists a new QUEUED job and queues it.
   v1::Job Enqueue(cache::JobRecord record, std::shared_ptr<geo::TerrainLayers> terrain);
   void Publish(const std::string& job_id, const v1::JobStatus& status);
+  // Sets a running job's message, publishes `status` to watchers and, with `persist`, writes its
+  // progress to the job store.
+  void ReportProgress(const std::string& job_id, v1::JobStatus& status, const std::string& message,
+                      bool persist);
   // Moves a job to its end state (persisted, published to watchers, logged).
   void Finish(const std::string& job_id, cache::JobState state, const std::string& message,
               const std::string& summary, const std::vector<std::string>& products);

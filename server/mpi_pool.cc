@@ -285,10 +285,8 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
       Send(p.SerializeAsString(), 0, kTagProgress);
     };
   }
-  const std::string me = wire.group_ranks_size() < 2 ? "rank " + std::to_string(rank)
-                                                      : "rank group led by rank " +
-                                                            std::to_string(wire.group_ranks(0));
-  TaskResult result = RunTask(tiers, task, context, me);
+  // computed_by is not sent: rank 0 labels the result with the ranks it dispatched to.
+  TaskResult result = RunTask(tiers, task, context, "rank " + std::to_string(rank));
   if (comm != MPI_COMM_NULL) {
     MPI_Comm comm_to_free = comm;
     MPI_Comm_free(&comm_to_free);

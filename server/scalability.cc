@@ -130,10 +130,8 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
 
   // One task per scale: the exact cache key, else the pool (never similarity: see the header).
   std::vector<CurveTask> tasks;
-  std::vector<TractionRequest> requests;
   for (int i = 0; i < n; ++i) {
     tasks.push_back(CurveResolver::Prepare(tier, ScaledRequest(full, request.scales(i))));
-    requests.push_back(tasks.back().request);
   }
   ResolveOptions options;
   options.allow_similarity = false;
@@ -141,7 +139,7 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
   options.stop = abandon;
   options.stop_on_failure = true;
   const std::vector<Resolution> resolved = resolver.Resolve(tier, tasks, options);
-  std::vector<std::optional<cache::StoredCurve>> found;
+  std::vector<cache::StoredCurve> found;  // the stored curve of each scale
   for (int i = 0; i < n; ++i) {
     const Resolution& r = resolved[i];
     if (r.source == CurveSource::kCancelled) {
@@ -156,29 +154,29 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
 
   // The full-scale wheel must be carried (it defines the band); a scale model that sinks past its
   // axle is reported as such.
-  Require(found[0]->curve.immobile_reason.empty(), "tyre",
-          "the full-scale wheel: " + found[0]->curve.immobile_reason);
+  Require(found[0].curve.immobile_reason.empty(), "tyre",
+          "the full-scale wheel: " + found[0].curve.immobile_reason);
   std::vector<std::vector<mobility::DimensionlessPoint>> dimensionless;
   for (int i = 0; i < n; ++i) {
-    dimensionless.push_back(mobility::ToDimensionless(requests[i], found[i]->curve));
+    dimensionless.push_back(mobility::ToDimensionless(tasks[i].request, found[i].curve));
   }
   const mobility::BandWidths band = mobility::FullScaleBand(dimensionless[0]);
   v1::ScalabilityReport report;
   for (int i = 0; i < n; ++i) {
     v1::ScalabilityRow* row = report.add_rows();
     row->set_scale(request.scales(i));
-    *row->mutable_tyre() = ToProto(requests[i].tyre);
-    row->set_wheel_load_n(requests[i].wheel_load_n);
-    if (found[i]->curve.immobile_reason.empty()) {
+    *row->mutable_tyre() = ToProto(tasks[i].request.tyre);
+    row->set_wheel_load_n(tasks[i].request.wheel_load_n);
+    if (found[i].curve.immobile_reason.empty()) {
       const mobility::BandAgreement a =
           mobility::CompareToFullScale(dimensionless[0], dimensionless[i]);
       row->set_drawbar_pull_inside_pct(a.drawbar_pull_pct);
       row->set_gross_traction_inside_pct(a.gross_traction_pct);
       row->set_efficiency_inside_pct(a.efficiency_pct);
     } else {
-      row->set_immobile_reason(found[i]->curve.immobile_reason);
+      row->set_immobile_reason(found[i].curve.immobile_reason);
     }
-    for (const TractionPoint& p : found[i]->curve.points) *row->add_points() = ToProto(p);
+    for (const TractionPoint& p : found[i].curve.points) *row->add_points() = ToProto(p);
     if (i > 0) {
       if (auto seed = mobility::ScalabilityTable::Seed001().For(request.scales(i),
                                                                 full.soil.cone_index_pa)) {
@@ -191,7 +189,7 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
       }
     }
     v1::TractionCurve shell;
-    FillCurve(*found[i], false, &shell);
+    FillCurve(found[i], false, &shell);
     *row->mutable_provenance() = shell.provenance();
   }
   report.set_band_drawbar_pull(band.drawbar_pull);

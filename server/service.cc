@@ -230,11 +230,7 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     if (!answer.curve.immobile_reason.empty()) {
       return StatusFor(ErrorKind::kCannotCarry, answer.curve.immobile_reason);
     }
-    if (answer.cached) {
-      FillAnswer(task.request, *answer.cached, response);
-    } else {
-      FillCurve(answer.stored, false, response);
-    }
+    FillResolved(task.request, answer, response);
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
@@ -312,6 +308,7 @@ grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext*, const v1::List
     info->set_ranks(static_cast<uint32_t>(needs.ranks));
     info->set_threads(static_cast<uint32_t>(needs.threads));
     info->set_expected_seconds(needs.expected_seconds);
+    info->set_curves_are_jobs(needs.expected_seconds >= kLongQuerySeconds);
   }
   return grpc::Status::OK;
 }

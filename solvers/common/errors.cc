@@ -37,22 +37,11 @@ ClassifiedError ClassifyCurrentException() {
   }
 }
 
-namespace {
-
-// InputError and friends prefix their message with "field: "; a message that crossed a rank
-// boundary already carries it, so it is not added twice.
-std::string Reason(const std::string& field, const std::string& message) {
-  const std::string prefix = field + ": ";
-  return !field.empty() && message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
-}
-
-}  // namespace
-
 void ThrowError(ErrorKind kind, const std::string& field, const std::string& message) {
   switch (kind) {
-    case ErrorKind::kBadInput: throw InputError(field, Reason(field, message));
-    case ErrorKind::kCannotCarry: throw CannotCarryError(field, Reason(field, message));
-    case ErrorKind::kLimit: throw LimitError(field, Reason(field, message));
+    case ErrorKind::kBadInput: throw InputError(field, message);
+    case ErrorKind::kCannotCarry: throw CannotCarryError(field, message);
+    case ErrorKind::kLimit: throw LimitError(field, message);
     case ErrorKind::kNumerical: throw NumericalError(message);
     case ErrorKind::kCancelled: throw CancelledError();
     case ErrorKind::kNone:

@@ -77,7 +77,7 @@ ClassifiedError ClassifyCurrentException();
 
 // Throws the exception class of `kind` (InputError for kBadInput, ...) with `message`: how an error
 // that crossed a rank boundary as a value is raised again with its kind. `field` names the field for
-// the kinds that carry one; for the others it is ignored.
+// the kinds that carry one (their message becomes "field: message"); for the others it is ignored.
 [[noreturn]] void ThrowError(ErrorKind kind, const std::string& field, const std::string& message);
 
 // Always-on check for input: throws InputError(field, reason) when `ok` is false.

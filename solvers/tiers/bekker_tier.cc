@@ -30,10 +30,8 @@ BekkerParameters BekkerTier::ResolveSoil(const SoilState& soil, const std::strin
     Require(soil.parameters->model == "bekker", field + ".parameters.model",
             "the bekker tier reads parameters of the bekker soil model, not '" +
                 soil.parameters->model + "'");
-    const BekkerParameters b = BekkerParameters::FromSoilModel(
+    return BekkerParameters::FromSoilModel(
         SoilModels().Validate(*soil.parameters, field + ".parameters"));
-    b.Validate(field + ".parameters.");
-    return b;
   }
   if (const BekkerSoil* entry = library_.Find(soil.soil_name)) return entry->parameters;
   throw InputError(field,

@@ -11,6 +11,21 @@ namespace gonogo {
 namespace tiers {
 namespace {
 
+// Holds for `hold_ms` in 10 ms steps, polling cancellation and reporting progress at each, then
+// answers with the empirical tier's curve under `tier`'s name and version.
+TractionCurve HoldThenAnswer(const TractionTier& tier, const TractionRequest& request,
+                             const ComputeContext& context, int hold_ms) {
+  for (int waited = 0; waited < hold_ms; waited += 10) {
+    if (context.Cancelled()) throw CancelledError();
+    context.Report(static_cast<double>(waited) / hold_ms);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  TractionCurve curve = EmpiricalTier().Compute(request);
+  curve.tier = tier.Name();
+  curve.tier_version = tier.Version();
+  return curve;
+}
+
 class RankGroupProbeTier : public TractionTier {
  public:
   std::string Name() const override { return "diagnostic-rank-group"; }
@@ -29,11 +44,9 @@ class RankGroupProbeTier : public TractionTier {
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
                              const ComputeContext& context) const override {
-    int group_rank = 0;
     if (context.communicator != MPI_COMM_NULL) {
       int size = 0, ones = 0, one = 1;
       MPI_Comm_size(context.communicator, &size);
-      MPI_Comm_rank(context.communicator, &group_rank);
       MPI_Allreduce(&one, &ones, 1, MPI_INT, MPI_SUM, context.communicator);
       if (size != 2 || ones != size) {
         throw std::logic_error("rank group of " + std::to_string(size) + " ranks, all-reduce " +
@@ -41,15 +54,7 @@ class RankGroupProbeTier : public TractionTier {
       }
     }
     // Every member makes the same number of (collective) cancellation checks.
-    for (int waited = 0; waited < kGroupHoldMs; waited += 10) {
-      if (context.Cancelled()) throw CancelledError();
-      context.Report(static_cast<double>(waited) / kGroupHoldMs);
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    TractionCurve curve = EmpiricalTier().Compute(request);
-    curve.tier = Name();
-    curve.tier_version = Version();
-    return curve;
+    return HoldThenAnswer(*this, request, context, kGroupHoldMs);
   }
 };
 
@@ -84,15 +89,7 @@ class SlowCurveProbeTier : public TractionTier {
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
                              const ComputeContext& context) const override {
-    for (int waited = 0; waited < kSlowCurveMs; waited += 10) {
-      if (context.Cancelled()) throw CancelledError();
-      context.Report(static_cast<double>(waited) / kSlowCurveMs);
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    TractionCurve curve = EmpiricalTier().Compute(request);
-    curve.tier = Name();
-    curve.tier_version = Version();
-    return curve;
+    return HoldThenAnswer(*this, request, context, kSlowCurveMs);
   }
 };
 
