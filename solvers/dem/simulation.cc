@@ -7,7 +7,7 @@
 
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
-#include "solvers/dem/byte_stream.h"
+#include "solvers/common/byte_stream.h"
 
 namespace gonogo::dem {
 

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <limits>
 
 #include "solvers/common/errors.h"
@@ -39,6 +40,8 @@ void ExplicitOptions::Validate(const std::string& p) const {
   Require(time_step_safety > 0 && time_step_safety <= 1, p + "time_step_safety",
           "must lie in (0, 1]");
   Require(mass_damping_per_s >= 0, p + "mass_damping_per_s", "must not be negative");
+  Require(std::isfinite(mass_scaling) && mass_scaling >= 1, p + "mass_scaling",
+          "must be a finite factor >= 1");
   Require(threads >= 1, p + "threads", "must be at least 1");
 }
 
@@ -53,7 +56,10 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
   Require(moduli_.bulk_pa > 0 && moduli_.shear_pa > 0, "fe.material",
           "its initial elastic moduli must be positive");
   const double p_wave_modulus_pa = moduli_.bulk_pa + 4.0 / 3.0 * moduli_.shear_pa;
-  const double wave_speed_m_s = std::sqrt(p_wave_modulus_pa / options_.density_kg_m3);
+  // Inertia is that of the scaled density: the wave speed, hence the stable step, and the viscous
+  // hourglass coefficient follow it.
+  const double inertial_density_kg_m3 = options_.mass_scaling * options_.density_kg_m3;
+  const double wave_speed_m_s = std::sqrt(p_wave_modulus_pa / inertial_density_kg_m3);
 
   const int ne = mesh_.num_elements();
   const int nn = mesh_.num_nodes();
@@ -75,12 +81,12 @@ ExplicitSolver::ExplicitSolver(HexMesh mesh,
     // LS-DYNA Theory Manual, "Hourglass control", viscous form): resists hourglass velocities only,
     // so it damps the modes the stiffness form leaves free in plastic flow without stiffening
     // slow deformation.
-    hourglass_viscosity_n_s_m_[e] = options_.hourglass_viscosity * options_.density_kg_m3 *
+    hourglass_viscosity_n_s_m_[e] = options_.hourglass_viscosity * inertial_density_kg_m3 *
                                     wave_speed_m_s * std::pow(r.volume_m3, 2.0 / 3.0) / 4.0;
     // Lumped mass: an eighth of the element's mass to each of its nodes (row sum of the
     // consistent mass of a parallelepiped).
     for (int a = 0; a < 8; ++a) {
-      nodal_masses_kg_[mesh_.elements[e][a]] += options_.density_kg_m3 * r.volume_m3 / 8.0;
+      nodal_masses_kg_[mesh_.elements[e][a]] += inertial_density_kg_m3 * r.volume_m3 / 8.0;
     }
     min_length_m = std::min(min_length_m, r.characteristic_length_m);
   }
@@ -221,10 +227,12 @@ StepStatus ExplicitSolver::Step(double dt_s) {
   // taken at the mid-step velocity:
   //   v_{n+1/2} = ((1 - alpha dt/2) v_{n-1/2} + dt a_n) / (1 + alpha dt/2),  x_{n+1} = x_n + dt v.
   const double damping = 0.5 * options_.mass_damping_per_s * dt_s;
+  const double weight_per_inertial_mass = 1.0 / options_.mass_scaling;  // gravity: physical mass
   const int nn = mesh_.num_nodes();
 #pragma omp parallel for schedule(static) num_threads(options_.threads)
   for (int n = 0; n < nn; ++n) {
-    const Vec3 force = external_forces_n_[n] + nodal_masses_kg_[n] * options_.gravity_m_s2 -
+    const Vec3 force = external_forces_n_[n] +
+                       weight_per_inertial_mass * nodal_masses_kg_[n] * options_.gravity_m_s2 -
                        internal_forces_n_[n];
     Vec3 v = ((1 - damping) * velocities_m_s_[n] + dt_s * force / nodal_masses_kg_[n]) /
              (1 + damping);
@@ -236,6 +244,23 @@ StepStatus ExplicitSolver::Step(double dt_s) {
   }
   time_s_ += dt_s;
   return {};
+}
+
+void ExplicitSolver::SetMassScaling(double mass_scaling) {
+  Require(std::isfinite(mass_scaling) && mass_scaling >= 1, "fe.mass_scaling",
+          "must be a finite factor >= 1");
+  if (time_s_ != 0) throw std::logic_error("fe: mass scaling is set before the first step");
+  const double ratio = mass_scaling / options_.mass_scaling;
+  for (double& mass : nodal_masses_kg_) mass *= ratio;
+  // The viscous hourglass coefficient is rho c_d (x geometry): rho x ratio, c_d / sqrt(ratio).
+  for (double& viscosity : hourglass_viscosity_n_s_m_) viscosity *= std::sqrt(ratio);
+  stable_time_step_s_ *= std::sqrt(ratio);
+  options_.mass_scaling = mass_scaling;
+}
+
+void ExplicitSolver::SetInitialPointState(int element, const std::string& state_bytes) {
+  if (time_s_ != 0) throw std::logic_error("fe: initial point states are set before the first step");
+  material_points_->Restore(element_points_.at(static_cast<std::size_t>(element)), state_bytes);
 }
 
 double ExplicitSolver::KineticEnergyJ() const {

@@ -40,6 +40,10 @@ struct ExplicitOptions {
   double hourglass_viscosity = 0.1;          // Q_hg of the viscous form, 0 to 0.15
   double time_step_safety = 0.5;             // fraction of the critical step StableTimeStep uses
   double mass_damping_per_s = 0;             // alpha of C = alpha M
+  // Mass scaling for quasi-static runs: inertia (the lumped masses, hence the stable step, which
+  // grows as sqrt(mass_scaling)) uses mass_scaling x density_kg_m3; weight uses density_kg_m3.
+  // 1: none. A quasi-static answer must not depend on it (check the kinetic energy).
+  double mass_scaling = 1;
   int threads = 1;                           // OpenMP threads of the element and node loops
 
   void Validate(const std::string& field_prefix) const;
@@ -77,6 +81,16 @@ class ExplicitSolver {
   // by the solver.
   std::vector<Vec3>& external_forces_n() { return external_forces_n_; }
   void set_mass_damping_per_s(double alpha) { options_.mass_damping_per_s = alpha; }
+  // Sets ExplicitOptions::mass_scaling after construction, before the first step (the bins pick
+  // it from the stable step they measure): masses x factor / old factor, stable step and viscous
+  // hourglass coefficients x sqrt of that. Throws InputError for a factor < 1, std::logic_error
+  // once stepping has begun.
+  void SetMassScaling(double mass_scaling);
+  // Replaces the committed material state of an element's point before the first step (an
+  // initial stress field: geostatic RVEs, a prestressed layer), as MaterialState bytes of the
+  // model. Throws InputError for bytes the model cannot read, std::logic_error once stepping has
+  // begun.
+  void SetInitialPointState(int element, const std::string& state_bytes);
 
   // --- time stepping ---------------------------------------------------------------------------
   // time_step_safety x min over elements of L_e / c_d, c_d = sqrt((K + 4G/3) / rho_0) from the
@@ -93,7 +107,9 @@ class ExplicitSolver {
   // f_int(x_n) of the last step, including hourglass forces; a prescribed node's reaction is
   // f_int - f_ext - m g (quasi-statically).
   const std::vector<Vec3>& internal_forces_n() const { return internal_forces_n_; }
+  // Inertial masses, mass_scaling x the physical ones (ExplicitOptions::mass_scaling).
   const std::vector<double>& nodal_masses_kg() const { return nodal_masses_kg_; }
+  double mass_scaling() const { return options_.mass_scaling; }
   // Cauchy stress of each element after the last step, Pa, tension positive.
   const std::vector<Eigen::Matrix3d>& element_stress_pa() const { return stress_pa_; }
   // The committed material points, one per element (handle element_point(e)).

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <string>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -47,6 +49,17 @@ class FeSoilBin : public SoilBin {
   const std::vector<double>& surface_areas_m2() const { return areas_m2_; }
   void set_stable_time_step_s(double dt_s) { stable_time_step_s_ = dt_s; }
   void set_wheel(std::unique_ptr<WheelContact> wheel) { wheel_ = std::move(wheel); }
+  // Mass scaling that lifts the stable step to `target_time_step_s` (no change when it is already
+  // larger): factor (target / dt)^2 on the masses, so the step and the settling rate (the first
+  // vertical mode's, proportional to the wave speed) move by its square root.
+  void ScaleMassToTimeStep(double target_time_step_s) {
+    if (!(target_time_step_s > stable_time_step_s_)) return;
+    const double ratio = target_time_step_s / stable_time_step_s_;
+    solver_->SetMassScaling(solver_->mass_scaling() * ratio * ratio);
+    settling_damping_per_s_ /= ratio;
+    solver_->set_mass_damping_per_s(settling_damping_per_s_);
+    stable_time_step_s_ = target_time_step_s;
+  }
 
   SoilBinSize Size() const override {
     return {solver_->mesh().num_elements(), solver_->mesh().num_nodes()};
@@ -168,7 +181,9 @@ FlatToolLoad FeSoilBin::FlatToolReaction(int tool_id) const {
     double force_z = 0;
     for (int n : tool.nodes) {
       const double m = s.nodal_masses_kg()[n];
-      force_z += m * (-(speed - tool.speed_before_m_s) / last_dt_s_) + m * gravity_m_s2 +
+      // Inertia of the (scaled) mass, weight of the physical one.
+      force_z += m * (-(speed - tool.speed_before_m_s) / last_dt_s_) +
+                 m / s.mass_scaling() * gravity_m_s2 +
                  s.internal_forces_n()[n].z();
     }
     load.normal_force_n = -force_z * whole_per_modelled_;
@@ -204,6 +219,24 @@ fe::ExplicitOptions SolverOptions(const FeBinSoil& soil, const FeBinOptions& opt
   fe_options.mass_damping_per_s = damping_per_s;
   fe_options.threads = options.threads;
   return fe_options;
+}
+
+// The soil's initial point states by depth (FeBinSoil::initial_state_at_depth), one call per
+// distinct depth of an element centre below z = 0.
+void SetInitialStatesByDepth(const FeBinSoil& soil, fe::ExplicitSolver& solver) {
+  if (!soil.initial_state_at_depth) return;
+  const fe::HexMesh& mesh = solver.mesh();
+  std::map<double, std::string> states;  // by depth, m
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    double centre_z_m = 0;
+    for (int node : mesh.elements[e]) centre_z_m += mesh.reference_positions_m[node].z() / 8.0;
+    const double depth_m = std::max(0.0, -centre_z_m);
+    auto found = states.find(depth_m);
+    if (found == states.end()) {
+      found = states.emplace(depth_m, soil.initial_state_at_depth(depth_m)).first;
+    }
+    solver.SetInitialPointState(e, found->second);
+  }
 }
 
 // Lines from -extent (or 0) to +extent, fine within `fine_extent` of the centre.
@@ -277,6 +310,7 @@ std::unique_ptr<SoilBin> FeSoilBinFactory::MakeWheelBin(const WheelBinLayout& la
   auto solver = std::make_unique<fe::ExplicitSolver>(
       std::move(mesh), soil_.model, SolverOptions(soil_, options_, settle_damping_per_s));
   fe::ExplicitSolver& s = *solver;
+  SetInitialStatesByDepth(soil_, s);
   const fe::HexMesh& m = s.mesh();
   // Floor fixed; end walls and the far side wall on rollers; y = 0 is the symmetry plane.
   for (int n : m.NodesOnPlane(2, -bin.depth_m)) {
@@ -310,6 +344,7 @@ std::unique_ptr<SoilBin> FeSoilBinFactory::MakeWheelBin(const WheelBinLayout& la
   result->set_stable_time_step_s(std::min(s.StableTimeStep(), contact_step_s));
   result->set_wheel(
       std::make_unique<WheelContact>(contact, result->surface(), result->surface_areas_m2()));
+  result->ScaleMassToTimeStep(options_.target_time_step_s);
   return result;
 }
 
@@ -327,6 +362,7 @@ std::unique_ptr<SoilBin> FeSoilBinFactory::MakeToolBin(const ToolBinLayout& layo
   auto solver = std::make_unique<fe::ExplicitSolver>(
       std::move(mesh), soil_.model, SolverOptions(soil_, options_, settle_damping_per_s));
   fe::ExplicitSolver& s = *solver;
+  SetInitialStatesByDepth(soil_, s);
   const fe::HexMesh& m = s.mesh();
   // Floor fixed, side walls and symmetry planes on rollers.
   for (int n : m.NodesOnPlane(2, -layout.depth_m)) {
@@ -337,9 +373,11 @@ std::unique_ptr<SoilBin> FeSoilBinFactory::MakeToolBin(const ToolBinLayout& layo
     for (int n : m.NodesOnPlane(axis, whole ? -extent_m : 0.0)) s.PrescribeVelocity(n, axis);
   }
   const double dt = s.StableTimeStep();
-  return std::make_unique<FeSoilBin>(std::move(solver), settle_damping_per_s, dt,
-                                     /*modelled_fraction=*/whole ? 1.0 : 0.25,
-                                     /*tools_allowed=*/true);
+  auto result = std::make_unique<FeSoilBin>(std::move(solver), settle_damping_per_s, dt,
+                                            /*modelled_fraction=*/whole ? 1.0 : 0.25,
+                                            /*tools_allowed=*/true);
+  result->ScaleMassToTimeStep(options_.target_time_step_s);
+  return result;
 }
 
 }  // namespace gonogo::rig

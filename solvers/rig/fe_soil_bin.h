@@ -15,6 +15,7 @@
 // scaled up to the whole wheel or tool.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -32,6 +33,11 @@ struct FeBinSoil {
   double density_kg_m3 = 0;
   double wheel_friction_coefficient = 0;  // mu of the rim-soil contact, -, >= 0
   double wheel_adhesion_pa = 0;           // c_a of the rim-soil contact, Pa, >= 0
+  // The initial state of a point whose element's centre lies depth_m below the surface, as the
+  // model's MaterialState bytes (an initial stress field: RVEs unloaded to the stress of their
+  // depth). Empty: every point starts from the model's InitialState. Called once per distinct
+  // depth of a bin.
+  std::function<std::string(double depth_m)> initial_state_at_depth;
   // Throws InputError naming field_prefix + the field.
   void Validate(const std::string& field_prefix) const;
 };
@@ -60,6 +66,10 @@ struct FeBinOptions {
   double hourglass_viscosity = 0.1;
   double time_step_safety = 0.5;  // of the critical step, for the elements and the contact
   int threads = 1;                // OpenMP threads of one bin
+  // Quasi-static runs over an expensive closure (a DE RVE per point): > 0 lifts the bin's stable
+  // step to this by mass scaling (fe::ExplicitOptions::mass_scaling; weight is kept), s. 0: the
+  // stable step of the physical masses.
+  double target_time_step_s = 0;
 };
 
 class FeSoilBinFactory : public SoilBinFactory {

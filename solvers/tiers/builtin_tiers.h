@@ -1,10 +1,20 @@
 // Every traction tier gonogo ships, registered in one place.
 #pragma once
 
+#include <string>
+
 #include "solvers/common/tier.h"
 
 namespace gonogo {
 
-void RegisterBuiltinTiers(TierRegistry& registry);
+// What a deployment chooses about the built-in tiers (server flags).
+struct BuiltinTierOptions {
+  std::string fe_de_preset = "default";  // tiers::FeDeOptions::Preset
+  int fe_de_ranks = 2;                   // MPI ranks of one fe-de task (--ranks-per-task)
+  int fe_de_threads = 1;                 // OpenMP threads per rank of an fe-de task
+};
+
+// Throws InputError naming the option for a bad value.
+void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& options = {});
 
 }  // namespace gonogo

@@ -11,7 +11,7 @@
 
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
-#include "solvers/dem/byte_stream.h"
+#include "solvers/common/byte_stream.h"
 
 namespace gonogo::dem::rve {
 
@@ -161,30 +161,8 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
       SimulationParamsFor(params, consolidation_material, side_m, 0.0), std::move(grains));
   Rve rve(params, std::move(simulation));
 
-  // Isotropic consolidation: every normal stress held at -p and every shear stress at 0 by the
-  // servo (a random packing carries some shear stress otherwise; the cell shears a little).
-  MixedControl isotropic;
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) isotropic.stress_controlled[a][b] = true;
-    isotropic.target_stress_pa(a, a) = -params.consolidation_pressure_pa;
-  }
-  const double target_pa = params.consolidation_pressure_pa;
-  bool settled = false;
-  for (int step = 0; step < kConsolidationStepBudget && !settled; ++step) {
-    rve.ServoStep(isotropic);
-    if (step % 100 == 99) {
-      const Matrix3 stress_pa = rve.StressPa();
-      const double pressure_pa = MeanPressurePa(stress_pa);
-      const Matrix3 deviation = stress_pa + target_pa * Matrix3::Identity();  // 0 at target
-      settled = std::abs(pressure_pa - target_pa) < kPressureTolerance * target_pa &&
-                deviation.cwiseAbs().maxCoeff() < kStressTolerance * target_pa &&
-                rve.simulation_->UnbalancedForceRatio() < kEquilibriumRatio;
-    }
-    if (progress && step % 1000 == 999) {
-      progress(std::min(1.0, std::max(0.0, MeanPressurePa(rve.StressPa()) / target_pa)));
-    }
-  }
-  if (!settled) {
+  // Isotropic consolidation.
+  if (!rve.ServoToIsotropic(params.consolidation_pressure_pa, progress)) {
     throw LimitError("consolidation_pressure_pa",
                      "isotropic consolidation did not settle within the step budget");
   }
@@ -196,6 +174,47 @@ Rve Rve::Generate(const RveParams& params, const std::function<void(double)>& pr
   loading->SetVelocityGradient(Matrix3::Zero());
   Rve consolidated(params, std::move(loading));
   return consolidated;
+}
+
+bool Rve::ServoToIsotropic(double target_pa, const std::function<void(double)>& progress) {
+  // Every normal stress held at -p and every shear stress at 0 by the servo (a random packing
+  // carries some shear stress otherwise; the cell shears a little).
+  MixedControl isotropic;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) isotropic.stress_controlled[a][b] = true;
+    isotropic.target_stress_pa(a, a) = -target_pa;
+  }
+  const double start_pa = MeanPressurePa(StressPa());
+  for (int step = 0; step < kConsolidationStepBudget; ++step) {
+    ServoStep(isotropic);
+    if (step % 100 == 99) {
+      const Matrix3 stress_pa = StressPa();
+      const double pressure_pa = MeanPressurePa(stress_pa);
+      const Matrix3 deviation = stress_pa + target_pa * Matrix3::Identity();  // 0 at target
+      if (std::abs(pressure_pa - target_pa) < kPressureTolerance * target_pa &&
+          deviation.cwiseAbs().maxCoeff() < kStressTolerance * target_pa &&
+          simulation_->UnbalancedForceRatio() < kEquilibriumRatio) {
+        return true;
+      }
+    }
+    if (progress && step % 1000 == 999) {
+      const double span = target_pa - start_pa;
+      const double done = span == 0 ? 1.0 : (MeanPressurePa(StressPa()) - start_pa) / span;
+      progress(std::min(1.0, std::max(0.0, done)));
+    }
+  }
+  return false;
+}
+
+void Rve::SettleIsotropic(double mean_stress_pa) {
+  Require(std::isfinite(mean_stress_pa) && mean_stress_pa > 0, "mean_stress_pa",
+          "must be a positive pressure, Pa");
+  if (!ServoToIsotropic(mean_stress_pa, nullptr)) {
+    throw LimitError("mean_stress_pa", "the RVE did not settle at " +
+                                           std::to_string(mean_stress_pa) +
+                                           " Pa within the step budget");
+  }
+  simulation_->SetVelocityGradient(Matrix3::Zero());
 }
 
 double Rve::StableRate1S() const { return StableRateAt1S(StressPa()); }

@@ -76,6 +76,13 @@ class Rve {
 
   // Runs `steps` steps under mixed control.
   void Run(const MixedControl& control, int steps);
+  // Brings the packing, with its own friction, to the isotropic stress mean_stress_pa
+  // (compression positive) under the servo, settled as Generate settles (mean within 1 %, each
+  // component within 3 %, unbalanced-force ratio below 5e-3): unloading a consolidated packing to
+  // the stress of its depth keeps the density its preparation gave. The strain is not reset.
+  // Throws InputError for a non-positive pressure, LimitError when it does not settle within
+  // the step budget.
+  void SettleIsotropic(double mean_stress_pa);
   // Applies a displacement-gradient increment dH to the cell over n steps, enough to respect the
   // inertial-number cap on its stretch (IncrementStrain) and at least min_steps, then
   // `relax_steps` with the cell fixed. Each step maps the cell by A = (I + dH)^(1/n), so the cell
@@ -117,6 +124,8 @@ class Rve {
  private:
   Rve(const RveParams& params, std::unique_ptr<Simulation> simulation);
   void ServoStep(const MixedControl& control);
+  // The isotropic servo of Generate and SettleIsotropic; false when the budget ran out.
+  bool ServoToIsotropic(double target_pa, const std::function<void(double)>& progress);
   double StableRateAt1S(const Matrix3& stress_pa) const;  // StableRate1S for a known stress
 
   RveParams params_;

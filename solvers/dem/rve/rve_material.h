@@ -49,6 +49,10 @@ class RveMaterial : public material::ConstitutiveModel {
   std::vector<material::PointResponse> Update(const std::vector<material::PointIncrement>& increments,
                                               bool want_tangent) const override;
 
+  const RveMaterialParams& params() const { return params_; }
+  // The consolidated RVE every point starts from (InitialState is a copy of it).
+  const Rve& initial() const { return initial_; }
+
  private:
   material::PointResponse UpdateOne(const material::PointIncrement& increment,
                                     bool want_tangent) const;

@@ -106,7 +106,9 @@ TEST(ExplicitSolverTest, ConfinedBarWaveSpeed) {
 // A soil column on a fixed floor with rollers on its sides, under gravity: oedometric static
 // solution sigma_zz = -rho g (H - z), sigma_xx = nu / (1 - nu) sigma_zz, top settlement
 // rho g H^2 / (2 M), M = K + 4G/3.
-TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
+// With mass scaling f the column settles to the same static answer (weight is the physical
+// mass's) while its stable step is sqrt(f) times longer. Returns the stable step.
+double CheckColumnUnderSelfWeight(double mass_scaling) {
   const double depth = 4.0;
   const int layers = 16;
   std::vector<double> z(layers + 1);
@@ -114,7 +116,8 @@ TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
   HexMesh mesh = MeshBox(Lines(1, 0.25), Lines(1, 0.25), z);
   ExplicitOptions options = Options();
   options.gravity_m_s2 = Vec3(0, 0, -units::kStandardGravityMps2);
-  const double c = std::sqrt(PWaveModulus() / kDensity);
+  options.mass_scaling = mass_scaling;
+  const double c = std::sqrt(PWaveModulus() / (mass_scaling * kDensity));
   options.mass_damping_per_s = units::kPi * c / depth;  // critical for the first mode
   ExplicitSolver solver(mesh, Elastic(), options);
   const HexMesh& m = solver.mesh();
@@ -124,7 +127,11 @@ TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
   }
   for (int n : m.NodesOnPlane(2, -depth)) solver.PrescribeVelocity(n, 2);
   const double dt = solver.StableTimeStep();
-  while (solver.time_s() < 40 * depth / c) ASSERT_TRUE(solver.Step(dt).ok);
+  while (solver.time_s() < 40 * depth / c) {
+    const StepStatus status = solver.Step(dt);
+    EXPECT_TRUE(status.ok) << status.reason;
+    if (!status.ok) return dt;
+  }
 
   const double g = units::kStandardGravityMps2;
   const double settlement = kDensity * g * depth * depth / (2 * PWaveModulus());
@@ -137,6 +144,25 @@ TEST(ExplicitSolverTest, ColumnUnderSelfWeight) {
     EXPECT_NEAR(s(2, 2), szz, 0.01 * kDensity * g * depth) << e;
     EXPECT_NEAR(s(0, 0), kPoisson / (1 - kPoisson) * szz, 0.01 * kDensity * g * depth) << e;
   }
+  EXPECT_THROW(solver.SetMassScaling(2 * mass_scaling), std::logic_error);
+  return dt;
+}
+
+TEST(ExplicitSolverTest, ColumnUnderSelfWeight) { CheckColumnUnderSelfWeight(1); }
+
+TEST(ExplicitSolverTest, MassScalingKeepsTheWeightAndLengthensTheStep) {
+  const double unscaled_dt = CheckColumnUnderSelfWeight(1);
+  EXPECT_NEAR(CheckColumnUnderSelfWeight(16) / unscaled_dt, 4.0, 1e-12);
+  // Set after construction, the same as given in the options.
+  HexMesh mesh = MeshBox(Lines(1, 1.0), Lines(1, 1.0), Lines(1, 1.0));
+  ExplicitOptions options = Options();
+  ExplicitSolver later(mesh, Elastic(), options);
+  later.SetMassScaling(9);
+  options.mass_scaling = 9;
+  ExplicitSolver given(mesh, Elastic(), options);
+  EXPECT_DOUBLE_EQ(later.StableTimeStep(), given.StableTimeStep());
+  EXPECT_DOUBLE_EQ(later.nodal_masses_kg()[0], given.nodal_masses_kg()[0]);
+  EXPECT_THROW(later.SetMassScaling(0.5), InputError);
 }
 
 // One element under a drained triaxial path (lateral stress held by forces on the side faces,

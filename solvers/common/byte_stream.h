@@ -14,7 +14,7 @@
 
 #include "solvers/common/errors.h"
 
-namespace gonogo::dem {
+namespace gonogo {
 
 class ByteWriter {
  public:
@@ -111,4 +111,4 @@ class ByteReader {
   std::size_t offset_ = 0;
 };
 
-}  // namespace gonogo::dem
+}  // namespace gonogo

@@ -1,0 +1,189 @@
+#include "solvers/tiers/fe_de_tier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <utility>
+
+#include "solvers/common/errors.h"
+#include "solvers/common/units.h"
+#include "solvers/rig/fe_soil_bin.h"
+#include "solvers/tiers/soil_catalogue.h"
+
+namespace gonogo::tiers {
+
+namespace {
+
+// RankGroupLink::Call codes of this tier.
+constexpr int kCallCancelCheck = 1;
+
+}  // namespace
+
+FeDeOptions FeDeOptions::Preset(const std::string& name) {
+  FeDeOptions options;
+  options.preset = name;
+  if (name == "default") return options;
+  if (name == "ci") {
+    options.elements_per_radius = 2;
+    options.procedure.gravity_settle_s = 0.1;
+    options.procedure.load_settle_s = 0.2;
+    options.procedure.self_propelled_s = 0.2;
+    options.procedure.speed_ramp_up_s = 0.05;
+    options.procedure.slip_ramp_s = 0.6;
+    options.numerics.min_steps_per_increment = 5;
+    options.numerics.relax_steps = 5;
+    options.numerics.max_inertial_number = 1e-2;
+    return options;
+  }
+  throw InputError("fe_de_preset", "unknown fe-de configuration '" + name + "'; known: default, ci");
+}
+
+void FeDeOptions::Validate(const std::string& p) const {
+  Require(preset == "default" || preset == "ci", p + "preset", "must be default or ci");
+  Require(std::isfinite(elements_per_radius) && elements_per_radius >= 1 &&
+              elements_per_radius <= 50,
+          p + "elements_per_radius", "must lie in [1, 50]");
+  Require(std::isfinite(fe_time_step_s) && fe_time_step_s > 0 && fe_time_step_s <= 0.01,
+          p + "fe_time_step_s", "must lie in (0, 0.01] s");
+  procedure.Validate(p + "procedure.");
+  numerics.Validate(p + "numerics.");
+  balance.Validate(p + "balance.");
+  Require(std::isfinite(min_initial_pressure_pa) && min_initial_pressure_pa > 0,
+          p + "min_initial_pressure_pa", "must be a positive pressure, Pa");
+  Require(ranks >= 1 && ranks <= 4096, p + "ranks", "must lie in [1, 4096]");
+  Require(threads >= 1 && threads <= 1024, p + "threads", "must lie in [1, 1024]");
+}
+
+FeDeTier::FeDeTier(FeDeOptions options) : options_(std::move(options)) {
+  options_.Validate("fe_de.");
+}
+
+std::string FeDeTier::Version() const {
+  return options_.preset == "default" ? "fe-de-1" : "fe-de-1-" + options_.preset;
+}
+
+TierDescription FeDeTier::Describe() const {
+  return {"explicit FE soil bin with a periodic DE RVE (Hertz-Mindlin grains, rolling resistance) "
+          "at every integration point, RVEs spread over an MPI rank group; rigid wheel through "
+          "seed 001's drawbar-pull procedure (" + options_.preset + " configuration)",
+          "soil name (dem-hertz-mindlin catalogue rows) or dem-hertz-mindlin parameters; tyre "
+          "diameter and width; wheel load",
+          options_.preset == "ci" ? "minutes on 2 cores" : "hours on a few cores",
+          {"dem-hertz-mindlin"}};
+}
+
+TierNeeds FeDeTier::Needs(const TractionRequest& /*request*/) const {
+  TierNeeds needs;
+  needs.ranks = options_.ranks;
+  needs.threads = options_.threads;
+  needs.expected_seconds = options_.preset == "ci" ? 180 : 4 * 3600;
+  return needs;
+}
+
+SoilParameters FeDeTier::ResolveSoil(const SoilState& soil, const std::string& field) const {
+  if (soil.parameters) {
+    Require(soil.parameters->model == dem::rve::kRveSoilModel, field + ".parameters.model",
+            std::string("the fe-de tier reads parameters of the ") + dem::rve::kRveSoilModel +
+                " soil model, not '" + soil.parameters->model + "'");
+    return SoilModels().Validate(*soil.parameters, field + ".parameters");
+  }
+  const SoilCatalogue& catalogue = BuiltinSoilCatalogue();
+  if (const CatalogueEntry* entry = catalogue.Find(soil.soil_name, dem::rve::kRveSoilModel)) {
+    return entry->parameters;
+  }
+  std::string known;
+  for (const CatalogueEntry& entry : catalogue.Entries()) {
+    if (entry.parameters.model == dem::rve::kRveSoilModel) {
+      known += (known.empty() ? "" : ", ") + entry.soil;
+    }
+  }
+  throw InputError(field + ".soil_name",
+                   (soil.soil_name.empty()
+                        ? std::string("is missing")
+                        : "no dem-hertz-mindlin soil '" + soil.soil_name + "' in the catalogue") +
+                       "; known: " + known);
+}
+
+void FeDeTier::ValidateSoil(const SoilState& soil, const std::string& field) const {
+  dem::rve::RveMaterialParamsFromSoil(ResolveSoil(soil, field), options_.numerics,
+                                      field + ".parameters");
+}
+
+TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
+                                     const ComputeContext& context) const {
+  request.Validate();
+  const SoilParameters soil = ResolveSoil(request.soil, "soil");
+  dem::rve::RveMaterialParams params =
+      dem::rve::RveMaterialParamsFromSoil(soil, options_.numerics, "soil.parameters");
+  // Every rank builds the same template RVE (deterministic generation), so a point's state means
+  // the same wherever it lives.
+  const std::shared_ptr<const dem::rve::RveMaterial> rve = dem::rve::SharedRveMaterial(params);
+
+  int group_rank = 0;
+  if (context.communicator != MPI_COMM_NULL) MPI_Comm_rank(context.communicator, &group_rank);
+  if (group_rank != 0) {
+    // An RVE server until rank 0 finishes; it joins rank 0's collective cancellation checks.
+    bool cancelled = false;
+    bridge::ServeRankGroup(context.communicator, *rve, bridge::ServeOptions{context.threads},
+                           [&](int code) {
+                             if (code == kCallCancelCheck) cancelled = context.Cancelled();
+                           });
+    if (cancelled) throw CancelledError();
+    return {};  // the leader's curve is the task's
+  }
+
+  std::shared_ptr<bridge::RankGroupLink> link;
+  std::shared_ptr<const material::ConstitutiveModel> model = rve;
+  if (context.communicator != MPI_COMM_NULL) {
+    link = std::make_shared<bridge::RankGroupLink>(context.communicator);
+    bridge::BalanceOptions balance = options_.balance;
+    balance.rank_zero_threads = context.threads;
+    model = std::make_shared<bridge::DistributedModel>(link, rve, balance);
+  }
+  rig::FeBinSoil bin_soil;
+  bin_soil.label = CanonicalText(soil);
+  bin_soil.model = model;
+  bin_soil.density_kg_m3 = dem::rve::ConsolidatedBulkDensityKgM3(*rve);
+  bin_soil.wheel_friction_coefficient = soil.Get("friction");
+  bin_soil.wheel_adhesion_pa = 0;
+  // Geostatic start: the template settled at the mean stress of each depth (rank 0 only; the
+  // states reach their owners as bytes).
+  const double unit_weight_n_m3 = bin_soil.density_kg_m3 * units::kStandardGravityMps2;
+  bin_soil.initial_state_at_depth = [&](double depth_m) {
+    dem::rve::Rve settled = rve->initial();
+    settled.SettleIsotropic(std::max(options_.min_initial_pressure_pa, unit_weight_n_m3 * depth_m));
+    return settled.Save();
+  };
+  rig::FeBinOptions fe_options;
+  fe_options.threads = context.threads;
+  fe_options.target_time_step_s = options_.fe_time_step_s;
+  const rig::FeSoilBinFactory bins(bin_soil, fe_options);
+
+  rig::RigWheel wheel;
+  wheel.radius_m = 0.5 * request.tyre.diameter_m;
+  wheel.width_m = request.tyre.width_m;
+  wheel.load_n = request.wheel_load_n;
+  rig::RigOptions rig_options;
+  rig_options.elements_per_radius = options_.elements_per_radius;
+  rig_options.threads = context.threads;
+  rig_options.progress = context.progress;
+  // Collective: the servers take part in the pool's cancellation check at the same point.
+  rig_options.cancelled = [&]() {
+    if (link) link->Call(kCallCancelCheck);
+    return context.Cancelled();
+  };
+  TractionCurve curve;
+  curve.tier = Name();
+  curve.tier_version = Version();
+  try {
+    const rig::RigRun run = rig::RunDrawbarPullTest(bins, wheel, options_.procedure, rig_options);
+    curve.points = rig::CurveFromRun(run, request.slips, wheel.radius_m);
+  } catch (const CannotCarryError& e) {
+    curve.points.clear();
+    curve.immobile_reason = e.what();
+  }
+  if (link) link->Finish();
+  return curve;
+}
+
+}  // namespace gonogo::tiers

