@@ -756,7 +756,7 @@ std::vector<TrialResponse> DistributedPointStore::TryUpdate(
   }
   std::vector<TrialResponse> trials(handles.size());
   StepBalance balance;
-  balance.step = history_.empty() ? 1 : history_.back().step + 1;
+  balance.step = history_->empty() ? 1 : history_->back().step + 1;
   balance.rank_seconds.assign(ranks, 0.0);
   {
     std::vector<const MaterialState*> committed;
@@ -809,7 +809,7 @@ std::vector<TrialResponse> DistributedPointStore::TryUpdate(
   balance.imbalance_after = balance.imbalance;
   balance.bytes_sent = group_->bytes_sent() - sent_before;
   balance.bytes_received = group_->bytes_received() - received_before;
-  history_.push_back(std::move(balance));
+  history_->push_back(std::move(balance));
   return trials;
 }
 
@@ -840,7 +840,7 @@ void DistributedPointStore::Commit(const std::vector<PointHandle>& handles) {
   }
   ++commits_since_rebalance_;
   if (balance_.enabled && commits_since_rebalance_ >= balance_.min_commits_between &&
-      !history_.empty() && history_.back().imbalance > balance_.threshold) {
+      !history_->empty() && history_->back().imbalance > balance_.threshold) {
     Rebalance();
   }
 }
@@ -996,7 +996,7 @@ void DistributedPointStore::Rebalance() {
   }
   if (!first_error.empty()) throw std::runtime_error(first_error);
   owner_ = std::move(new_owner);
-  StepBalance& last = history_.back();
+  StepBalance& last = history_->back();
   last.points_moved = static_cast<int>(moves.size());
   last.imbalance_after = imbalance();
 }
@@ -1096,6 +1096,7 @@ void DistributedPointStore::ReadCheckpoint(const std::string& directory) {
 std::unique_ptr<material::MaterialPointStore> DistributedModel::MakePointStore() const {
   auto store = std::make_unique<DistributedPointStore>(group_, *inner_, balance_);
   store->set_registration(current_store_);
+  store->set_history(history_);
   *current_store_ = store.get();
   return store;
 }

@@ -129,10 +129,15 @@ class DistributedPointStore : public material::MaterialPointStore {
 
   int Owner(material::PointHandle handle) const;
   std::vector<std::int64_t> PointsPerRank() const;
-  const std::vector<StepBalance>& balance_history() const { return history_; }
+  const std::vector<StepBalance>& balance_history() const { return *history_; }
   // Cleared (set to nullptr) when this store is destroyed, if it still points here.
   void set_registration(std::shared_ptr<DistributedPointStore*> slot) {
     registration_ = std::move(slot);
+  }
+  // Where the per-step balance records go (default: the store's own list); a model shares one
+  // list between its stores so the records outlive them.
+  void set_history(std::shared_ptr<std::vector<StepBalance>> history) {
+    history_ = std::move(history);
   }
 
   // Every committed state to `directory` (which must exist): each rank writes its own points to
@@ -160,7 +165,8 @@ class DistributedPointStore : public material::MaterialPointStore {
   // Rank 0's own points: committed and trial states.
   std::vector<std::unique_ptr<material::MaterialState>> local_committed_;  // (points) null if remote
   std::vector<std::unique_ptr<material::MaterialState>> local_trial_;
-  std::vector<StepBalance> history_;
+  std::shared_ptr<std::vector<StepBalance>> history_ =
+      std::make_shared<std::vector<StepBalance>>();
   int commits_since_rebalance_ = 0;
   std::shared_ptr<DistributedPointStore*> registration_;
 };
@@ -192,6 +198,8 @@ class DistributedModel : public material::ConstitutiveModel {
   // The most recently made store that still lives (its solver owns it), for reports (balance
   // history) and checkpoints; nullptr when none.
   DistributedPointStore* current_store() const { return *current_store_; }
+  // Every TryUpdate of every store this model made, in order.
+  const std::vector<StepBalance>& balance_history() const { return *history_; }
 
  private:
   std::shared_ptr<RankGroupLink> group_;
@@ -200,6 +208,8 @@ class DistributedModel : public material::ConstitutiveModel {
   // Shared with the stores, which clear it when they are destroyed.
   std::shared_ptr<DistributedPointStore*> current_store_ =
       std::make_shared<DistributedPointStore*>(nullptr);
+  std::shared_ptr<std::vector<StepBalance>> history_ =
+      std::make_shared<std::vector<StepBalance>>();
 };
 
 }  // namespace gonogo::bridge

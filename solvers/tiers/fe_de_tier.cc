@@ -1,6 +1,7 @@
 #include "solvers/tiers/fe_de_tier.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <utility>
@@ -109,8 +110,39 @@ void FeDeTier::ValidateSoil(const SoilState& soil, const std::string& field) con
                                       field + ".parameters");
 }
 
+int FeDeRunReport::PointsMoved() const {
+  int moved = 0;
+  for (const bridge::StepBalance& step : balance) moved += step.points_moved;
+  return moved;
+}
+
+double FeDeRunReport::MeanImbalance() const {
+  double sum = 0;
+  for (const bridge::StepBalance& step : balance) sum += step.imbalance;
+  return balance.empty() ? 0 : sum / static_cast<double>(balance.size());
+}
+
+double FeDeRunReport::MaxImbalance() const {
+  double largest = 0;
+  for (const bridge::StepBalance& step : balance) largest = std::max(largest, step.imbalance);
+  return largest;
+}
+
+double FeDeRunReport::MeanBytesPerStep() const {
+  double sum = 0;
+  for (const bridge::StepBalance& step : balance) {
+    sum += static_cast<double>(step.bytes_sent + step.bytes_received);
+  }
+  return balance.empty() ? 0 : sum / static_cast<double>(balance.size());
+}
+
 TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
                                      const ComputeContext& context) const {
+  return Run(request, context).curve;
+}
+
+FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext& context) const {
+  const auto start = std::chrono::steady_clock::now();
   request.Validate();
   const SoilParameters soil = ResolveSoil(request.soil, "soil");
   dem::rve::RveMaterialParams params =
@@ -132,13 +164,18 @@ TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
     return {};  // the leader's curve is the task's
   }
 
+  FeDeRunReport report;
+
   std::shared_ptr<bridge::RankGroupLink> link;
+  std::shared_ptr<const bridge::DistributedModel> distributed;
   std::shared_ptr<const material::ConstitutiveModel> model = rve;
   if (context.communicator != MPI_COMM_NULL) {
     link = std::make_shared<bridge::RankGroupLink>(context.communicator);
+    report.ranks = link->size();
     bridge::BalanceOptions balance = options_.balance;
     balance.rank_zero_threads = context.threads;
-    model = std::make_shared<bridge::DistributedModel>(link, rve, balance);
+    distributed = std::make_shared<bridge::DistributedModel>(link, rve, balance);
+    model = distributed;
   }
   rig::FeBinSoil bin_soil;
   bin_soil.label = CanonicalText(soil);
@@ -172,18 +209,24 @@ TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
     if (link) link->Call(kCallCancelCheck);
     return context.Cancelled();
   };
-  TractionCurve curve;
+  TractionCurve& curve = report.curve;
   curve.tier = Name();
   curve.tier_version = Version();
   try {
     const rig::RigRun run = rig::RunDrawbarPullTest(bins, wheel, options_.procedure, rig_options);
     curve.points = rig::CurveFromRun(run, request.slips, wheel.radius_m);
+    report.elements = run.elements;
+    report.fe_steps = run.steps;
+    report.fe_time_step_s = run.time_step_s;
   } catch (const CannotCarryError& e) {
     curve.points.clear();
     curve.immobile_reason = e.what();
   }
   if (link) link->Finish();
-  return curve;
+  if (distributed) report.balance = distributed->balance_history();
+  report.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
 }
 
 }  // namespace gonogo::tiers

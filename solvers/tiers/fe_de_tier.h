@@ -54,6 +54,22 @@ struct FeDeOptions {
   void Validate(const std::string& field_prefix) const;
 };
 
+// What one fe-de run did, beside its curve (group rank 0's view; empty on the other ranks).
+struct FeDeRunReport {
+  TractionCurve curve;
+  int elements = 0;            // FE elements = RVEs
+  int fe_steps = 0;
+  double fe_time_step_s = 0;
+  int ranks = 1;               // of the group the RVEs were spread over
+  double wall_seconds = 0;
+  // Per FE step (each TryUpdate), when the RVEs were distributed; see bridge::StepBalance.
+  std::vector<bridge::StepBalance> balance;
+  int PointsMoved() const;
+  double MeanImbalance() const;  // mean over steps of max / mean - 1 of the ranks' RVE seconds
+  double MaxImbalance() const;
+  double MeanBytesPerStep() const;  // sent + received by the FE rank
+};
+
 class FeDeTier : public TractionTier {
  public:
   FeDeTier() : FeDeTier(FeDeOptions{}) {}
@@ -70,6 +86,8 @@ class FeDeTier : public TractionTier {
   // The validated dem-hertz-mindlin set the tier runs on; throws InputError(field...) otherwise.
   SoilParameters ResolveSoil(const SoilState& soil, const std::string& field) const;
   const FeDeOptions& options() const { return options_; }
+  // Compute, with the run's figures. Collective as Compute is.
+  FeDeRunReport Run(const TractionRequest& request, const ComputeContext& context) const;
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
