@@ -47,6 +47,7 @@ struct Options {
   int max_jobs = 2;
   bool diagnostic_tiers = false;
   std::string log_level = "info";
+  gonogo::BuiltinTierOptions tier_options;
 };
 
 // Parses the command line with CLI11: an unknown or mistyped option, a missing value or one out of
@@ -70,6 +71,16 @@ Options Parse(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   app.add_option("--task-delay-ms", o.task_delay_ms,
                  "delay every traction task by this many ms (fault-injection tests and demos)");
+  app.add_option("--fe-de-preset", o.tier_options.fe_de_preset,
+                 "fe-de configuration: default (seed 001 procedure, R/4 mesh; hours) or ci (coarse "
+                 "and short; minutes)")
+      ->check(CLI::IsMember({"default", "ci"}));
+  app.add_option("--ranks-per-task", o.tier_options.fe_de_ranks,
+                 "MPI ranks of one fe-de task (the FE rank and RVE servers; capped at the workers)")
+      ->check(CLI::Range(1, 4096));
+  app.add_option("--fe-de-threads", o.tier_options.fe_de_threads,
+                 "OpenMP threads per rank of an fe-de task")
+      ->check(CLI::Range(1, 1024));
   app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
                "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off (logs go to stderr)")
@@ -159,6 +170,13 @@ void SetUpLogging(const std::string& level, const std::string& who) {
 }
 
 int main(int argc, char** argv) {
+  // Under an MPI launcher several ranks share the cores: OpenMP threads that spin while they wait
+  // (libgomp's default) would take them from the other ranks. libgomp reads OMP_WAIT_POLICY when
+  // it is loaded, before main, so the process starts itself again with the variable set.
+  if (gonogo::server::LaunchedUnderMpi() && std::getenv("OMP_WAIT_POLICY") == nullptr) {
+    setenv("OMP_WAIT_POLICY", "passive", 1);
+    execv("/proc/self/exe", argv);  // returns only on failure: go on with the default policy
+  }
   const Options options = Parse(argc, argv);
   // Signals are taken by sigwait in Serve(); every thread created later inherits the mask.
   sigset_t signals;
@@ -168,7 +186,7 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   gonogo::TierRegistry tiers;
-  gonogo::RegisterBuiltinTiers(tiers);
+  gonogo::RegisterBuiltinTiers(tiers, options.tier_options);
   if (options.diagnostic_tiers) gonogo::RegisterDiagnosticTiers(tiers);
 
   if (!gonogo::server::LaunchedUnderMpi()) {

@@ -24,7 +24,7 @@ double StepOrThrow(SoilBin& bin, double dt, const RigOptions& options, int step,
   if (!status.ok) {
     throw std::runtime_error(std::string("virtual bevameter (") + test + "): " + status.reason);
   }
-  if (step % 200 == 0 && options.cancelled && options.cancelled()) throw CancelledError();
+  if (step % options.poll_every_steps == 0 && options.cancelled && options.cancelled()) throw CancelledError();
   return bin.time_s();
 }
 

@@ -205,7 +205,7 @@ RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Sch
       run.samples.push_back(sums.Mean(bin->time_s(), state.phase));
       sums = SampleSums();
     }
-    if (step % 200 == 0) {
+    if (step % options.poll_every_steps == 0) {
       if (options.cancelled && options.cancelled()) throw CancelledError();
       if (options.progress) options.progress(static_cast<double>(step) / steps);
     }
@@ -237,6 +237,7 @@ void RigOptions::Validate(const std::string& p) const {
   Require(elements_per_radius >= 2, p + "elements_per_radius", "must be at least 2");
   Require(rolling_damping_per_s >= 0, p + "rolling_damping_per_s", "must not be negative");
   Require(threads >= 1, p + "threads", "must be at least 1");
+  Require(poll_every_steps >= 1, p + "poll_every_steps", "must be at least 1");
 }
 
 FeSoilBinFactory FeClassicBins(const FeSoil& soil, const RigOptions& options) {

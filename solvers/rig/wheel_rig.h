@@ -58,7 +58,10 @@ struct RigOptions {
   int threads = 1;
   // Called now and then with the fraction of simulated time done.
   std::function<void(double fraction)> progress;
-  CancelCheck cancelled;  // polled every 200 steps; CancelledError once it returns true
+  CancelCheck cancelled;  // polled every poll_every_steps; CancelledError once it returns true
+  // Steps between cancellation polls and progress reports: cheap steps poll seldom, expensive
+  // ones (an RVE per element) often, so a cancel takes effect within seconds.
+  int poll_every_steps = 200;
   void Validate(const std::string& field_prefix) const;
 };
 

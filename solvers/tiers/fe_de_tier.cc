@@ -41,9 +41,9 @@ FeDeOptions FeDeOptions::Preset(const std::string& name) {
 
 void FeDeOptions::Validate(const std::string& p) const {
   Require(preset == "default" || preset == "ci", p + "preset", "must be default or ci");
-  Require(std::isfinite(elements_per_radius) && elements_per_radius >= 1 &&
+  Require(std::isfinite(elements_per_radius) && elements_per_radius >= 2 &&
               elements_per_radius <= 50,
-          p + "elements_per_radius", "must lie in [1, 50]");
+          p + "elements_per_radius", "must lie in [2, 50]");
   Require(std::isfinite(fe_time_step_s) && fe_time_step_s > 0 && fe_time_step_s <= 0.01,
           p + "fe_time_step_s", "must lie in (0, 0.01] s");
   procedure.Validate(p + "procedure.");
@@ -204,6 +204,7 @@ FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext
   rig_options.elements_per_radius = options_.elements_per_radius;
   rig_options.threads = context.threads;
   rig_options.progress = context.progress;
+  rig_options.poll_every_steps = 20;  // an FE-DE step costs tens of ms: a cancel within a second
   // Collective: the servers take part in the pool's cancellation check at the same point.
   rig_options.cancelled = [&]() {
     if (link) link->Call(kCallCancelCheck);

@@ -96,6 +96,33 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   }
 }
 
+// The pool's collective cancellation: every member asks, the group agrees (logical or). Rank 2
+// wants out at its third check; the whole group stops there, every rank with CancelledError.
+TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
+  const int rank = WorldRank();
+  const FeDeTier tier(TinyOptions());
+  int checks = 0;
+  ComputeContext context;
+  context.communicator = MPI_COMM_WORLD;
+  context.cancelled = [&]() {
+    ++checks;
+    int mine = rank == 2 && checks >= 3 ? 1 : 0;
+    int any = 0;
+    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);
+    return any != 0;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_THROW(tier.Compute(Request(), context), CancelledError) << "rank " << rank;
+  EXPECT_EQ(checks, 3) << "rank " << rank;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 60) << "three checks 20 FE steps apart, after the RVE templates";
+  // The group is usable again at once.
+  int one = 1, sum = 0;
+  MPI_Allreduce(&one, &sum, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(sum, 3);
+}
+
 }  // namespace
 }  // namespace gonogo::tiers
 

@@ -1,0 +1,103 @@
+// The fe-de tier through the whole service: `mpirun -np 3 gonogo-server --fe-de-preset ci
+// --ranks-per-task 2` (rank 0 serving, ranks 1 and 2 one rank group), driven by the `gonogo`
+// command line. A curve job runs on the group and reports progress; the same request again comes
+// from the cache; a cancelled job stops the whole group within seconds and frees its ranks for
+// the next task.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdio>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "server_process.h"
+
+namespace gonogo::testing {
+namespace {
+
+struct CliRun {
+  int exit_code;
+  std::string out;  // stdout and stderr together
+};
+
+CliRun Gonogo(const std::string& endpoint, const std::string& args) {
+  const std::string cmd =
+      BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+int CsvRows(const std::string& out) {
+  int rows = 0;
+  std::istringstream lines(out);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (!line.empty() && (line[0] == '0' || line[0] == '1') && line.find(',') != std::string::npos) {
+      ++rows;
+    }
+  }
+  return rows;
+}
+
+const char kWheel[] =
+    "curve --tier fe-de --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+    "--section-height 0.1 --wheel-load 1000 --slip-step 0.25";
+
+TEST(FeDeService, CurveJobOnARankGroupThenFromTheCacheAndCancelFreesTheGroup) {
+  ScratchDir dir("fe-de-service");
+  ServerProcess server(dir.path(), {"--fe-de-preset", "ci", "--ranks-per-task", "2"}, 3);
+
+  const CliRun tiers = Gonogo(server.endpoint(), "tiers");
+  ASSERT_EQ(tiers.exit_code, 0) << tiers.out;
+  EXPECT_NE(tiers.out.find("fe-de (fe-de-1-ci)"), std::string::npos) << tiers.out;
+
+  const auto start = std::chrono::steady_clock::now();
+  const CliRun first = Gonogo(server.endpoint(), std::string(kWheel) + " --csv");
+  const double first_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(first.exit_code, 0) << first.out;
+  EXPECT_NE(first.out.find("curve job job-"), std::string::npos) << first.out;
+  EXPECT_EQ(CsvRows(first.out), 5) << first.out;
+  std::printf("  fe-de ci curve through the service: %.1f s\n", first_s);
+
+  const CliRun again = Gonogo(server.endpoint(), kWheel);
+  ASSERT_EQ(again.exit_code, 0) << again.out;
+  EXPECT_NE(again.out.find("from the cache"), std::string::npos) << again.out;
+
+  // Another wheel load: a new curve. Cancel it once it is under way.
+  const std::string heavier =
+      "curve --tier fe-de --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+      "--section-height 0.1 --wheel-load 1500 --slip-step 0.25 --no-wait";
+  const CliRun submitted = Gonogo(server.endpoint(), heavier);
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out;
+  std::smatch match;
+  const std::regex job_id("job-[0-9a-f-]+");
+  ASSERT_TRUE(std::regex_search(submitted.out, match, job_id)) << submitted.out;
+  const std::string id = match.str();
+  std::this_thread::sleep_for(std::chrono::seconds(15));  // the group is stepping the FE by now
+  const auto cancel_start = std::chrono::steady_clock::now();
+  const CliRun cancel = Gonogo(server.endpoint(), "cancel " + id);
+  ASSERT_EQ(cancel.exit_code, 0) << cancel.out;
+  const CliRun watched = Gonogo(server.endpoint(), "watch " + id);
+  const double cancel_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - cancel_start).count();
+  EXPECT_NE(watched.out.find("CANCELLED"), std::string::npos) << watched.out;
+  EXPECT_LT(cancel_s, 30) << "the group stops at its next collective cancellation check";
+  std::printf("  cancelled in %.1f s\n", cancel_s);
+
+  // The group's ranks are free again: a one-rank curve is answered.
+  const CliRun after = Gonogo(server.endpoint(),
+                              "curve --tier bekker --soil lll_dry_sand --wheel-diameter 0.5 "
+                              "--wheel-width 0.2 --section-height 0.1 --wheel-load 1000");
+  EXPECT_EQ(after.exit_code, 0) << after.out;
+  EXPECT_EQ(server.Terminate(), 0);
+}
+
+}  // namespace
+}  // namespace gonogo::testing
