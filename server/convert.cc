@@ -142,6 +142,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   *r->mutable_soil() = ToProto(t.request.soil);
   for (double s : t.request.slips) w.add_slips(s);
   w.set_threads(t.needs.threads);
+  w.set_checkpoint_dir(t.checkpoint_dir);
   return w;
 }
 
@@ -156,6 +157,7 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.request.slips.assign(w.slips().begin(), w.slips().end());
   t.needs.ranks = std::max(1, w.group_ranks_size());
   t.needs.threads = std::max(1, w.threads());
+  t.checkpoint_dir = w.checkpoint_dir();
   return t;
 }
 

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
+#include <cstdio>
 #include <deque>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -15,6 +18,18 @@
 namespace gonogo::server {
 
 namespace {
+
+// A task's restart directory: root/<FNV-1a 64 of its cache key, hex>, stable across restarts.
+std::string CheckpointDirectory(const std::string& root, const std::string& key) {
+  std::uint64_t hash = 1469598103934665603ull;
+  for (unsigned char c : key) {
+    hash ^= c;
+    hash *= 1099511628211ull;
+  }
+  char name[17];
+  std::snprintf(name, sizeof name, "%016llx", static_cast<unsigned long long>(hash));
+  return root + "/" + name;
+}
 
 int64_t NowMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -82,6 +97,12 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       spec.request = tasks[i].request;
       spec.debug_delay_ms = options.debug_delay_ms;
       spec.needs = tier.Needs(tasks[i].request);
+      if (!checkpoint_root_.empty() && spec.needs.expected_seconds >= kCheckpointedTaskSeconds) {
+        spec.checkpoint_dir = CheckpointDirectory(checkpoint_root_, tasks[i].key);
+        std::error_code error;
+        std::filesystem::create_directories(spec.checkpoint_dir, error);
+        if (error) spec.checkpoint_dir.clear();  // computed without checkpoints then
+      }
       if (options.on_task_progress) {
         spec.progress = [report = options.on_task_progress, i](double f) { report(i, f); };
       }
@@ -111,6 +132,10 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       const size_t i = it->second;
       outstanding.erase(it);
       Resolution& r = out[i];
+      if (!result.cancelled && !checkpoint_root_.empty()) {
+        std::error_code ignored;  // stored or failed: the restart files are of no more use
+        std::filesystem::remove_all(CheckpointDirectory(checkpoint_root_, tasks[i].key), ignored);
+      }
       if (result.ok) {
         result.curve.tier = tier.Name();
         r.source = CurveSource::kComputed;

@@ -86,12 +86,22 @@ class CurveResolver {
                                   const ResolveOptions& options);
 
   WorkerPool& pool() { return pool_; }
+  // Long tasks (a tier expected to take kCheckpointedTaskSeconds or more) get a restart
+  // directory under `root`, named by their cache key: a task stopped by a crash or a drain and
+  // run again (the job resumed after a restart, or the same curve asked again) continues from its
+  // last checkpoint. The directory is removed once the curve is stored or the task failed; a
+  // cancelled task keeps it. Empty root (the default): no checkpoints.
+  void set_checkpoint_root(std::string root) { checkpoint_root_ = std::move(root); }
 
  private:
   cache::CurveStore& store_;
   WorkerPool& pool_;
   std::atomic<uint64_t> next_task_id_{1};
+  std::string checkpoint_root_;
 };
+
+// Tasks expected to take at least this long get a restart directory (set_checkpoint_root).
+inline constexpr double kCheckpointedTaskSeconds = 60;
 
 // The API form of a resolved curve answering `request` (an exact or similarity hit with its
 // provenance, or a freshly computed curve). `answer` must be ok().

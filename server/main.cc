@@ -81,6 +81,10 @@ Options Parse(int argc, char** argv) {
   app.add_option("--fe-de-threads", o.tier_options.fe_de_threads,
                  "OpenMP threads per rank of an fe-de task")
       ->check(CLI::Range(1, 1024));
+  app.add_option("--fe-de-checkpoint-s", o.tier_options.fe_de_checkpoint_every_s,
+                 "wall seconds between checkpoints of a running fe-de curve (FE state and every "
+                 "RVE, under DATA_DIR/checkpoints; a restarted server resumes from them)")
+      ->check(CLI::Range(0.0, 86400.0));
   app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
                "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off (logs go to stderr)")
@@ -107,6 +111,9 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   config.max_concurrent_jobs = o.max_jobs;
   cache::CurveStore curves(db);
   server::CurveResolver resolver(curves, pool);
+  // Restart files of long curves (fe-de); the worker ranks read them too, so under MPI the data
+  // directory must be on a file system they share.
+  resolver.set_checkpoint_root((std::filesystem::path(o.data_dir) / "checkpoints").string());
   server::JobManager jobs(config, db, tiers, resolver);
   const int resumed = jobs.ResumeUnfinished();
   server::MobilityServiceImpl service(jobs, db, tiers, resolver, server::ServiceLimits{});

@@ -251,6 +251,7 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
   ComputeContext context;
   context.communicator = comm;
   context.threads = task.needs.threads;
+  context.checkpoint_dir = task.checkpoint_dir;
   bool cancelled = false;
   auto last_poll = std::chrono::steady_clock::now();
   if (comm == MPI_COMM_NULL) {
@@ -273,8 +274,9 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
       return cancelled;
     };
   }
+  // Outlives the progress callback, which captures it (at most two reports a second).
+  auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   if (leader) {
-    auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     context.progress = [&](double fraction) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last_report < std::chrono::milliseconds(500)) return;

@@ -60,6 +60,7 @@ void ThreadPool::Loop() {
     context.cancelled = [flag] { return flag->load(); };
     context.progress = entry.task.progress;
     context.threads = std::max(1, entry.task.needs.threads);
+    context.checkpoint_dir = entry.task.checkpoint_dir;
     TaskResult r = RunTask(tiers_, entry.task, context, "thread");
     {
       std::lock_guard<std::mutex> lock(mutex_);

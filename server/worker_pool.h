@@ -29,6 +29,8 @@ struct TaskSpec {
   // with fewer workers gives it all of them, the thread pool runs it alone.
   TierNeeds needs;
   TaskProgress progress;  // may be empty; called on a pool thread; never crosses MPI
+  // Where the tier may keep restart files (ComputeContext::checkpoint_dir); empty: none.
+  std::string checkpoint_dir;
 };
 
 struct TaskResult {

@@ -18,6 +18,7 @@
 
 #include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
+#include "solvers/material/checkpoint_files.h"
 
 namespace gonogo::bridge {
 
@@ -29,6 +30,7 @@ using material::PointIncrement;
 using material::PointResponse;
 using material::TrialResponse;
 using material::UpdateStatus;
+namespace checkpoint = material::checkpoint;
 
 namespace {
 
@@ -53,8 +55,6 @@ enum class Command : std::uint32_t {
   kFinish,
 };
 
-constexpr char kPointsTag[9] = "GNGPTS01";
-constexpr char kManifestTag[9] = "GNGPTM01";
 
 // Back-off for polling: 20 us doubling to 2 ms, so an idle server costs nothing and a busy group
 // answers within a fraction of a DE increment.
@@ -183,120 +183,14 @@ void GetTrial(ByteReader& in, TrialResponse& trial, double& seconds) {
   in.Get(seconds);
 }
 
-// --- checkpoint files ---------------------------------------------------------------------------
-
-std::string PointsFile(const std::string& directory, std::uint64_t generation, int rank) {
-  return directory + "/points." + std::to_string(generation) + "." + std::to_string(rank) + ".bin";
-}
-std::string ManifestFile(const std::string& directory) { return directory + "/points.manifest"; }
-
-// Writes `bytes` to `path` so that a crash leaves the old file or the new one: a temporary
-// beside it, fsync, rename.
-void WriteFileAtomically(const std::string& path, const std::string& bytes) {
-  const std::string temporary = path + ".tmp";
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0) throw std::runtime_error("cannot create " + temporary);
-  std::size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n <= 0) {
-      ::close(fd);
-      throw std::runtime_error("cannot write " + temporary + " (disk full?)");
-    }
-    written += static_cast<std::size_t>(n);
-  }
-  const bool synced = ::fsync(fd) == 0;
-  ::close(fd);
-  if (!synced || std::rename(temporary.c_str(), path.c_str()) != 0) {
-    throw std::runtime_error("cannot commit " + path);
-  }
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("checkpoint", "cannot open " + path);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
-std::string PointsFileBytes(const std::string& model_name,
-                            const std::vector<std::pair<PointHandle, std::string>>& points) {
-  ByteWriter out;
-  out.PutTag(kPointsTag);
-  out.PutBlob(model_name);
-  out.Put(static_cast<std::uint64_t>(points.size()));
-  for (const auto& [handle, bytes] : points) {
-    out.Put(static_cast<std::int64_t>(handle));
-    out.PutBlob(bytes);
-  }
-  return out.Take();
-}
-
-struct Manifest {
-  std::uint64_t generation = 0;
-  std::string model_name;
-  std::uint32_t files = 0;
-  std::uint64_t points = 0;
-};
-
-std::string ManifestBytes(const Manifest& manifest) {
-  ByteWriter out;
-  out.PutTag(kManifestTag);
-  out.Put(manifest.generation);
-  out.PutBlob(manifest.model_name);
-  out.Put(manifest.files);
-  out.Put(manifest.points);
-  return out.Take();
-}
-
-Manifest ReadManifest(const std::string& directory) {
-  const std::string bytes = ReadFile(ManifestFile(directory));
-  Manifest manifest;
-  ByteReader in(bytes);
-  in.ExpectTag(kManifestTag);
-  in.Get(manifest.generation);
-  in.GetBlob(manifest.model_name);
-  in.Get(manifest.files);
-  in.Get(manifest.points);
-  return manifest;
-}
-
-// The states of `wanted` from every points file of a checkpoint, restored through `model`.
-// Throws InputError("checkpoint", ...) for a damaged file or a point missing.
+// The points of `wanted` from a checkpoint, restored through `model`.
 std::unordered_map<PointHandle, std::unique_ptr<MaterialState>> LoadCheckpointPoints(
     const ConstitutiveModel& model, const std::string& directory, std::uint64_t generation,
-    std::uint32_t files, const std::vector<PointHandle>& wanted) {
+    const std::vector<PointHandle>& wanted) {
+  const checkpoint::Manifest manifest = checkpoint::ReadManifest(directory, generation);
   std::unordered_map<PointHandle, std::unique_ptr<MaterialState>> loaded;
-  std::unordered_map<PointHandle, bool> want;
-  for (PointHandle handle : wanted) want[handle] = true;
-  for (std::uint32_t file = 0; file < files; ++file) {
-    const std::string path = PointsFile(directory, generation, static_cast<int>(file));
-    const std::string bytes = ReadFile(path);
-    try {
-      ByteReader in(bytes);
-      in.ExpectTag(kPointsTag);
-      std::string model_name;
-      in.GetBlob(model_name);
-      Require(model_name == model.Name(), "checkpoint",
-              path + " holds points of '" + model_name + "', not '" + model.Name() + "'");
-      std::uint64_t count = 0;
-      in.Get(count);
-      for (std::uint64_t k = 0; k < count; ++k) {
-        std::int64_t handle = 0;
-        std::string state;
-        in.Get(handle);
-        in.GetBlob(state);
-        if (want.count(handle) != 0) loaded[handle] = model.RestoreState(state);
-      }
-    } catch (const InputError& e) {
-      throw InputError("checkpoint", path + ": " + e.what());
-    }
-  }
-  for (PointHandle handle : wanted) {
-    Require(loaded.count(handle) != 0, "checkpoint",
-            "point " + std::to_string(handle) + " is in no points file of generation " +
-                std::to_string(generation));
+  for (auto& [handle, bytes] : checkpoint::LoadPointBytes(directory, manifest, wanted)) {
+    loaded[handle] = model.RestoreState(bytes);
   }
   return loaded;
 }
@@ -488,20 +382,18 @@ class Server {
         for (const auto& [handle, point] : store.points) {
           points.emplace_back(handle, point.committed->Serialize());
         }
-        WriteFileAtomically(PointsFile(directory, generation, rank_),
-                            PointsFileBytes(model_.Name(), points));
+        checkpoint::WriteFileAtomically(checkpoint::PointsFile(directory, generation, rank_),
+                                        checkpoint::PointsFileBytes(model_.Name(), points));
         return OkReply();
       }
       case Command::kReadCheckpoint: {
         std::string directory;
         std::uint64_t generation = 0;
-        std::uint32_t files = 0;
         in.GetBlob(directory);
         in.Get(generation);
-        in.Get(files);
         std::vector<PointHandle> wanted;
         for (const auto& [handle, point] : store.points) wanted.push_back(handle);
-        store.staged = LoadCheckpointPoints(model_, directory, generation, files, wanted);
+        store.staged = LoadCheckpointPoints(model_, directory, generation, wanted);
         return OkReply();
       }
       case Command::kApplyCheckpoint:
@@ -1001,13 +893,8 @@ void DistributedPointStore::Rebalance() {
   last.imbalance_after = imbalance();
 }
 
-void DistributedPointStore::WriteCheckpoint(const std::string& directory) {
-  std::uint64_t generation = 1;
-  try {
-    generation = ReadManifest(directory).generation + 1;
-  } catch (const InputError&) {
-    // No checkpoint yet (or an unreadable one, which this one replaces).
-  }
+void DistributedPointStore::WriteCheckpoint(const std::string& directory,
+                                            std::uint64_t generation) {
   ByteWriter command = CommandHeader(Command::kWriteCheckpoint, id_);
   command.PutBlob(directory);
   command.Put(generation);
@@ -1015,12 +902,12 @@ void DistributedPointStore::WriteCheckpoint(const std::string& directory) {
   for (int r = 1; r < group_->size(); ++r) group_->Send(r, bytes);
   std::string first_error;
   try {
-    std::vector<std::pair<PointHandle, std::string>> points;
+    std::vector<std::pair<checkpoint::Handle, std::string>> points;
     for (std::size_t p = 0; p < owner_.size(); ++p) {
       if (owner_[p] == 0) points.emplace_back(p, local_committed_[p]->Serialize());
     }
-    WriteFileAtomically(PointsFile(directory, generation, 0),
-                        PointsFileBytes(model_.Name(), points));
+    checkpoint::WriteFileAtomically(checkpoint::PointsFile(directory, generation, 0),
+                                    checkpoint::PointsFileBytes(model_.Name(), points));
   } catch (const std::exception& e) {
     first_error = e.what();
   }
@@ -1032,25 +919,21 @@ void DistributedPointStore::WriteCheckpoint(const std::string& directory) {
     }
   }
   if (!first_error.empty()) throw std::runtime_error("checkpoint not written: " + first_error);
-  Manifest manifest;
+  checkpoint::Manifest manifest;
   manifest.generation = generation;
   manifest.model_name = model_.Name();
   manifest.files = static_cast<std::uint32_t>(group_->size());
   manifest.points = static_cast<std::uint64_t>(size());
-  std::uint32_t old_files = 0;
-  try {
-    old_files = ReadManifest(directory).files;
-  } catch (const InputError&) {
-  }
-  WriteFileAtomically(ManifestFile(directory), ManifestBytes(manifest));
-  // The previous generation is no longer referenced.
-  for (std::uint32_t r = 0; r < old_files && generation > 1; ++r) {
-    std::remove(PointsFile(directory, generation - 1, static_cast<int>(r)).c_str());
-  }
+  checkpoint::WriteFileAtomically(checkpoint::ManifestFile(directory, generation),
+                                  checkpoint::ManifestBytes(manifest));
+  // The directory is shared by the group (one file system), so rank 0 removes the files of
+  // every rank.
+  if (generation >= 2) checkpoint::RemoveGeneration(directory, generation - 2);
 }
 
-void DistributedPointStore::ReadCheckpoint(const std::string& directory) {
-  const Manifest manifest = ReadManifest(directory);
+void DistributedPointStore::ReadCheckpoint(const std::string& directory,
+                                           std::uint64_t generation) {
+  const checkpoint::Manifest manifest = checkpoint::ReadManifest(directory, generation);
   Require(manifest.model_name == model_.Name(), "checkpoint",
           "holds points of '" + manifest.model_name + "', not '" + model_.Name() + "'");
   Require(manifest.points == static_cast<std::uint64_t>(size()), "checkpoint",
@@ -1058,8 +941,7 @@ void DistributedPointStore::ReadCheckpoint(const std::string& directory) {
               std::to_string(size()));
   ByteWriter command = CommandHeader(Command::kReadCheckpoint, id_);
   command.PutBlob(directory);
-  command.Put(manifest.generation);
-  command.Put(manifest.files);
+  command.Put(generation);
   const std::string bytes = command.Take();
   for (int r = 1; r < group_->size(); ++r) group_->Send(r, bytes);
   std::string first_error;
@@ -1069,7 +951,7 @@ void DistributedPointStore::ReadCheckpoint(const std::string& directory) {
     for (std::size_t p = 0; p < owner_.size(); ++p) {
       if (owner_[p] == 0) wanted.push_back(static_cast<PointHandle>(p));
     }
-    own = LoadCheckpointPoints(model_, directory, manifest.generation, manifest.files, wanted);
+    own = LoadCheckpointPoints(model_, directory, generation, wanted);
   } catch (const std::exception& e) {
     first_error = e.what();
   }

@@ -140,15 +140,12 @@ class DistributedPointStore : public material::MaterialPointStore {
     history_ = std::move(history);
   }
 
-  // Every committed state to `directory` (which must exist): each rank writes its own points to
-  // points.<rank>.bin (a temporary file, fsync, rename), then rank 0 writes points.manifest the
-  // same way, so a crash leaves either the old checkpoint or the new one. Collective through the
-  // link. Throws std::runtime_error naming the file when a write fails.
-  void WriteCheckpoint(const std::string& directory);
-  // Replaces every committed state with the checkpoint's (written by a group of any size, for a
-  // store of the same size and model; drops trials). Throws InputError("checkpoint", ...) for a
-  // missing, foreign or damaged checkpoint; nothing is replaced then.
-  void ReadCheckpoint(const std::string& directory);
+  // MaterialPointStore's checkpoints, each rank writing its own points file
+  // (points.<generation>.<rank>.bin), rank 0 the manifest once all are in; the group's ranks
+  // must share the directory's file system. Reading stages every rank's share and applies it
+  // only when all were read, so a damaged checkpoint changes nothing. Collective through the link.
+  void WriteCheckpoint(const std::string& directory, std::uint64_t generation) override;
+  void ReadCheckpoint(const std::string& directory, std::uint64_t generation) override;
 
  private:
   void Rebalance();

@@ -36,6 +36,11 @@ struct ComputeContext {
   // MPI_COMM_NULL when the task runs on one rank or in a process without MPI: the tier computes
   // alone.
   MPI_Comm communicator = MPI_COMM_NULL;
+  // An existing directory, private to this request (the same one when the same request is run
+  // again, after a restart), where a long tier may keep restart files and resume from them;
+  // empty: no checkpoints. On every rank of a group it names the same directory (a file system
+  // the group shares).
+  std::string checkpoint_dir;
 
   bool Cancelled() const { return cancelled && cancelled(); }
   void Report(double fraction) const {

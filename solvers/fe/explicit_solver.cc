@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <limits>
 
+#include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
 
 namespace gonogo::fe {
@@ -261,6 +262,74 @@ void ExplicitSolver::SetMassScaling(double mass_scaling) {
 void ExplicitSolver::SetInitialPointState(int element, const std::string& state_bytes) {
   if (time_s_ != 0) throw std::logic_error("fe: initial point states are set before the first step");
   material_points_->Restore(element_points_.at(static_cast<std::size_t>(element)), state_bytes);
+}
+
+namespace {
+constexpr char kSolverStateTag[9] = "GNGFES01";
+
+template <typename Matrix>
+void PutMatrices(ByteWriter& out, const std::vector<Matrix>& values) {
+  out.Put(static_cast<std::uint64_t>(values.size()));
+  for (const Matrix& value : values) {
+    for (int k = 0; k < value.size(); ++k) out.Put(value.data()[k]);
+  }
+}
+
+template <typename Matrix>
+void GetMatrices(ByteReader& in, std::vector<Matrix>& values, std::size_t expected) {
+  std::uint64_t count = 0;
+  in.Get(count);
+  Require(count == expected, "state", "saved for another mesh");
+  values.resize(expected);
+  for (Matrix& value : values) {
+    for (int k = 0; k < value.size(); ++k) in.Get(value.data()[k]);
+  }
+}
+}  // namespace
+
+std::string ExplicitSolver::SaveState() const {
+  ByteWriter out;
+  out.PutTag(kSolverStateTag);
+  out.Put(time_s_);
+  out.Put(options_.mass_damping_per_s);
+  PutMatrices(out, positions_m_);
+  PutMatrices(out, velocities_m_s_);
+  PutMatrices(out, internal_forces_n_);
+  PutMatrices(out, previous_f_);
+  PutMatrices(out, stress_pa_);
+  PutMatrices(out, hourglass_forces_n_);
+  PutMatrices(out, hourglass_modes_m_);
+  return out.Take();
+}
+
+void ExplicitSolver::RestoreState(const std::string& bytes) {
+  const std::size_t nodes = static_cast<std::size_t>(mesh_.num_nodes());
+  const std::size_t elements = static_cast<std::size_t>(mesh_.num_elements());
+  ByteReader in(bytes);
+  in.ExpectTag(kSolverStateTag);
+  double time_s = 0, damping = 0;
+  in.Get(time_s);
+  in.Get(damping);
+  std::vector<Vec3> positions, velocities, internal_forces;
+  std::vector<Eigen::Matrix3d> previous_f, stress;
+  std::vector<Eigen::Matrix<double, 4, 3>> hourglass_forces, hourglass_modes;
+  GetMatrices(in, positions, nodes);
+  GetMatrices(in, velocities, nodes);
+  GetMatrices(in, internal_forces, nodes);
+  GetMatrices(in, previous_f, elements);
+  GetMatrices(in, stress, elements);
+  GetMatrices(in, hourglass_forces, elements);
+  GetMatrices(in, hourglass_modes, elements);
+  Require(in.AtEnd(), "state", "trailing bytes after the solver state");
+  time_s_ = time_s;
+  options_.mass_damping_per_s = damping;
+  positions_m_ = std::move(positions);
+  velocities_m_s_ = std::move(velocities);
+  internal_forces_n_ = std::move(internal_forces);
+  previous_f_ = std::move(previous_f);
+  stress_pa_ = std::move(stress);
+  hourglass_forces_n_ = std::move(hourglass_forces);
+  hourglass_modes_m_ = std::move(hourglass_modes);
 }
 
 double ExplicitSolver::KineticEnergyJ() const {

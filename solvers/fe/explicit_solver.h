@@ -118,6 +118,17 @@ class ExplicitSolver {
   Eigen::Matrix3d element_deformation_gradient(int element) const { return previous_f_[element]; }
   const Hex8Reference& element_reference(int element) const { return references_[element]; }
   double KineticEnergyJ() const;
+
+  // --- checkpoints ---------------------------------------------------------------------------
+  // The solver's own state: time, node positions, velocities and internal forces, each element's
+  // last F, stress and hourglass history, and the mass damping. Not the material points (their
+  // store checkpoints them, material_points()) nor the mesh, boundary conditions or options,
+  // which the caller rebuilds the same way. RestoreState on a solver built the same way continues
+  // bit for bit; it throws InputError for bytes of another mesh or a damaged buffer, and then
+  // changes nothing.
+  std::string SaveState() const;
+  void RestoreState(const std::string& bytes);
+  material::MaterialPointStore& mutable_material_points() { return *material_points_; }
   int threads() const { return options_.threads; }
 
  private:

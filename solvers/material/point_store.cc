@@ -1,6 +1,9 @@
 #include "solvers/material/point_store.h"
 
 #include <stdexcept>
+
+#include "solvers/common/errors.h"
+#include "solvers/material/checkpoint_files.h"
 #include <utility>
 
 namespace gonogo::material {
@@ -89,6 +92,45 @@ void LocalPointStore::Restore(PointHandle handle, const std::string& bytes) {
 
 const MaterialState& LocalPointStore::committed(PointHandle handle) const {
   return *committed_[Index(handle)];
+}
+
+void MaterialPointStore::WriteCheckpoint(const std::string& directory,
+                                         std::uint64_t generation) {
+  std::vector<std::pair<checkpoint::Handle, std::string>> points;
+  for (PointHandle handle = 0; handle < size(); ++handle) {
+    points.emplace_back(handle, Serialize(handle));
+  }
+  checkpoint::WriteFileAtomically(checkpoint::PointsFile(directory, generation, 0),
+                                  checkpoint::PointsFileBytes(ModelName(), points));
+  checkpoint::Manifest manifest;
+  manifest.generation = generation;
+  manifest.model_name = ModelName();
+  manifest.files = 1;
+  manifest.points = static_cast<std::uint64_t>(size());
+  checkpoint::WriteFileAtomically(checkpoint::ManifestFile(directory, generation),
+                                  checkpoint::ManifestBytes(manifest));
+  if (generation >= 2) checkpoint::RemoveGeneration(directory, generation - 2);
+}
+
+void MaterialPointStore::ReadCheckpoint(const std::string& directory, std::uint64_t generation) {
+  const checkpoint::Manifest manifest = checkpoint::ReadManifest(directory, generation);
+  Require(manifest.model_name == ModelName(), "checkpoint",
+          "holds points of '" + manifest.model_name + "', not '" + ModelName() + "'");
+  Require(manifest.points == static_cast<std::uint64_t>(size()), "checkpoint",
+          "holds " + std::to_string(manifest.points) + " points; this store has " +
+              std::to_string(size()));
+  std::vector<checkpoint::Handle> wanted;
+  for (PointHandle handle = 0; handle < size(); ++handle) wanted.push_back(handle);
+  const auto loaded = checkpoint::LoadPointBytes(directory, manifest, wanted);
+  // All or nothing: the states as they were come back if one cannot be read.
+  std::vector<std::string> before;
+  for (PointHandle handle = 0; handle < size(); ++handle) before.push_back(Serialize(handle));
+  try {
+    for (PointHandle handle = 0; handle < size(); ++handle) Restore(handle, loaded.at(handle));
+  } catch (const std::exception& e) {
+    for (PointHandle handle = 0; handle < size(); ++handle) Restore(handle, before[handle]);
+    throw InputError("checkpoint", std::string("a point state cannot be read: ") + e.what());
+  }
 }
 
 }  // namespace gonogo::material

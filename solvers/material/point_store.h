@@ -66,6 +66,19 @@ class MaterialPointStore {
   // throws gonogo::InputError for bytes the model cannot read.
   virtual std::string Serialize(PointHandle handle) const = 0;
   virtual void Restore(PointHandle handle, const std::string& bytes) = 0;
+
+  // Checkpoint `generation` of every committed state in `directory` (which must exist), in the
+  // files of checkpoint_files.h, each written atomically, the manifest last; then generation - 2
+  // is removed, so the last two complete generations stay (a caller that records the generation
+  // in its own state file after this returns can always find the one it names). The default
+  // writes every point from this process (points file of rank 0); a distributed store has every
+  // rank write its own. Throws std::runtime_error naming the file when a write fails.
+  virtual void WriteCheckpoint(const std::string& directory, std::uint64_t generation);
+  // Replaces every committed state with checkpoint `generation` of `directory` (written by a
+  // store of any distribution with the same number of points and model) and drops the trials.
+  // Throws InputError("checkpoint", ...) for a missing, foreign or damaged checkpoint; nothing
+  // is replaced then.
+  virtual void ReadCheckpoint(const std::string& directory, std::uint64_t generation);
 };
 
 // The store of any ConstitutiveModel in this process: committed and trial MaterialStates side by

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
 #include "solvers/fe/explicit_solver.h"
@@ -30,6 +31,8 @@ struct ToolNodes {
   bool grips = false;           // x and y of its nodes are prescribed
   bool pushes = false;          // z of its nodes is prescribed
 };
+
+constexpr char kBinStateTag[9] = "GNGFEB01";
 
 class FeSoilBin : public SoilBin {
  public:
@@ -69,6 +72,38 @@ class FeSoilBin : public SoilBin {
   double SettlingDampingPerS() const override { return settling_damping_per_s_; }
   void SetDampingPerS(double damping_per_s) override {
     solver_->set_mass_damping_per_s(damping_per_s);
+  }
+
+  // Wheel bins only: the solver's state, the contact's slip histories and the last step.
+  std::string SaveState() const override {
+    if (wheel_ == nullptr) throw std::logic_error("only wheel bins checkpoint");
+    ByteWriter out;
+    out.PutTag(kBinStateTag);
+    out.PutBlob(solver_->SaveState());
+    out.PutVector(wheel_->slip_history_m());
+    out.Put(last_dt_s_);
+    return out.Take();
+  }
+  void RestoreState(const std::string& bytes) override {
+    if (wheel_ == nullptr) throw std::logic_error("only wheel bins checkpoint");
+    ByteReader in(bytes);
+    in.ExpectTag(kBinStateTag);
+    std::string solver_state;
+    in.GetBlob(solver_state);
+    std::vector<Vec3> slip_history;
+    in.GetVector(slip_history, wheel_->surface_nodes().size());
+    double last_dt_s = 0;
+    in.Get(last_dt_s);
+    Require(in.AtEnd(), "state", "trailing bytes after the bin state");
+    solver_->RestoreState(solver_state);  // checks the mesh, changes nothing on failure
+    wheel_->RestoreSlipHistory(std::move(slip_history));
+    last_dt_s_ = last_dt_s;
+  }
+  void WritePointCheckpoint(const std::string& directory, std::uint64_t generation) override {
+    solver_->mutable_material_points().WriteCheckpoint(directory, generation);
+  }
+  void ReadPointCheckpoint(const std::string& directory, std::uint64_t generation) override {
+    solver_->mutable_material_points().ReadCheckpoint(directory, generation);
   }
 
   BinStepStatus Step(double dt_s) override {

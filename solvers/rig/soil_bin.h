@@ -12,7 +12,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace gonogo::rig {
@@ -136,6 +138,26 @@ class SoilBin {
   virtual void DriveFlatTool(int tool, const FlatToolDrive& drive) = 0;
   // After a Step: what the tool did to the soil during it.
   virtual FlatToolLoad FlatToolReaction(int tool) const = 0;
+
+  // Checkpoints, for procedures that outlast a process (the fe-de tier's drawbar-pull runs). The
+  // bin's own state as bytes (SaveState) and its material points as checkpoint `generation` in a
+  // directory (material/point_store.h, per rank where they are distributed): a bin built the same
+  // way and restored from both continues bit for bit. Bins that cannot checkpoint throw
+  // std::logic_error; RestoreState throws InputError for bytes of another bin.
+  virtual std::string SaveState() const {
+    throw std::logic_error("this soil bin cannot checkpoint");
+  }
+  virtual void RestoreState(const std::string& /*bytes*/) {
+    throw std::logic_error("this soil bin cannot checkpoint");
+  }
+  virtual void WritePointCheckpoint(const std::string& /*directory*/,
+                                    std::uint64_t /*generation*/) {
+    throw std::logic_error("this soil bin cannot checkpoint");
+  }
+  virtual void ReadPointCheckpoint(const std::string& /*directory*/,
+                                   std::uint64_t /*generation*/) {
+    throw std::logic_error("this soil bin cannot checkpoint");
+  }
 };
 
 // A soil the rig can build bins of: one per FE material, one per DEM packing, ...

@@ -28,6 +28,12 @@ WheelContact::WheelContact(const WheelContactParams& params, std::vector<int> su
           "needs one tributary area per node");
 }
 
+void WheelContact::RestoreSlipHistory(std::vector<Vec3> slip_history_m) {
+  Require(slip_history_m.size() == surface_nodes_.size(), "state",
+          "slip histories saved for another surface");
+  slip_history_m_ = std::move(slip_history_m);
+}
+
 WheelLoad WheelContact::Apply(const WheelMotion& wheel, fe::ExplicitSolver& solver, double dt_s) {
   const auto& x = solver.positions_m();
   const auto& v = solver.velocities_m_s();

@@ -47,6 +47,10 @@ class WheelContact {
 
   const WheelContactParams& params() const { return params_; }
   const std::vector<int>& surface_nodes() const { return surface_nodes_; }
+  // The slip histories, for checkpoints; restoring a count that does not match throws
+  // InputError.
+  const std::vector<Vec3>& slip_history_m() const { return slip_history_m_; }
+  void RestoreSlipHistory(std::vector<Vec3> slip_history_m);
 
  private:
   WheelContactParams params_;

@@ -1,11 +1,18 @@
 #include "solvers/rig/wheel_rig.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <optional>
+#include <sstream>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 
+#include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
+#include "solvers/material/checkpoint_files.h"
 #include "solvers/common/units.h"
 #include "solvers/rig/fe_soil_bin.h"
 
@@ -112,6 +119,95 @@ struct SampleSums {
   }
 };
 
+// What a drawbar-pull run keeps between steps besides its bin: written to rig.state beside the
+// bin's point checkpoint, whose generation it names.
+struct RunState {
+  std::string fingerprint;  // the run this state belongs to
+  std::uint64_t generation = 0;
+  int next_step = 0;
+  double hub_z_m = 0, hub_vz_m_s = 0, hub_x_m = 0, towed_angular_speed_rad_s = 0;
+  SampleSums sums;
+  std::vector<RigSample> samples;
+  std::string bin_state;
+};
+
+constexpr char kRunStateTag[9] = "GNGRIG01";
+
+void PutSample(ByteWriter& out, const RigSample& s) {
+  out.Put(s.time_s);
+  out.Put(static_cast<std::int32_t>(s.phase));
+  for (double v : {s.slip, s.forward_speed_m_s, s.angular_speed_rad_s, s.drawbar_pull_n,
+                   s.torque_nm, s.vertical_force_n, s.sinkage_m}) {
+    out.Put(v);
+  }
+}
+
+void GetSample(ByteReader& in, RigSample& s) {
+  std::int32_t phase = 0;
+  in.Get(s.time_s);
+  in.Get(phase);
+  s.phase = phase;
+  for (double* v : {&s.slip, &s.forward_speed_m_s, &s.angular_speed_rad_s, &s.drawbar_pull_n,
+                    &s.torque_nm, &s.vertical_force_n, &s.sinkage_m}) {
+    in.Get(*v);
+  }
+}
+
+std::string RunStateBytes(const RunState& state) {
+  ByteWriter out;
+  out.PutTag(kRunStateTag);
+  out.PutBlob(state.fingerprint);
+  out.Put(state.generation);
+  out.Put(static_cast<std::int32_t>(state.next_step));
+  for (double v : {state.hub_z_m, state.hub_vz_m_s, state.hub_x_m,
+                   state.towed_angular_speed_rad_s}) {
+    out.Put(v);
+  }
+  out.Put(static_cast<std::int32_t>(state.sums.count));
+  PutSample(out, state.sums.sum);
+  out.Put(static_cast<std::uint64_t>(state.samples.size()));
+  for (const RigSample& sample : state.samples) PutSample(out, sample);
+  out.PutBlob(state.bin_state);
+  return out.Take();
+}
+
+// The state in `path` if it is one of the run `fingerprint`; nullopt otherwise (none, another
+// run's, unreadable).
+std::optional<RunState> ReadRunState(const std::string& path, const std::string& fingerprint) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return std::nullopt;
+  std::ostringstream buffer;
+  buffer << file.rdbuf();
+  const std::string bytes = buffer.str();
+  try {
+    ByteReader in(bytes);
+    in.ExpectTag(kRunStateTag);
+    RunState state;
+    in.GetBlob(state.fingerprint);
+    if (state.fingerprint != fingerprint) return std::nullopt;
+    in.Get(state.generation);
+    std::int32_t next_step = 0, count = 0;
+    in.Get(next_step);
+    state.next_step = next_step;
+    for (double* v : {&state.hub_z_m, &state.hub_vz_m_s, &state.hub_x_m,
+                      &state.towed_angular_speed_rad_s}) {
+      in.Get(*v);
+    }
+    in.Get(count);
+    state.sums.count = count;
+    GetSample(in, state.sums.sum);
+    std::uint64_t samples = 0;
+    in.Get(samples);
+    Require(samples < (1u << 24), "state", "implausible sample count");
+    state.samples.resize(samples);
+    for (RigSample& sample : state.samples) GetSample(in, sample);
+    in.GetBlob(state.bin_state);
+    return state;
+  } catch (const InputError&) {
+    return std::nullopt;
+  }
+}
+
 RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Schedule& schedule,
                 const RigOptions& options) {
   wheel.Validate("wheel.");
@@ -158,7 +254,36 @@ RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Sch
   const double inertia_kg_m2 = 0.5 * mass_kg * radius * radius;
   double towed_angular_speed_rad_s = schedule.AngularSpeed();
   SampleSums sums;
-  for (int step = 0; step < steps; ++step) {
+
+  // Resume from a checkpoint of this very run, if there is one.
+  const bool checkpointing = !options.checkpoint_dir.empty();
+  const std::string state_path = options.checkpoint_dir + "/rig.state";
+  std::ostringstream fingerprint;
+  fingerprint.precision(17);
+  fingerprint << soil_bin.Describe() << "|" << run.elements << "|" << run.nodes << "|" << dt
+              << "|" << steps << "|" << radius << "|" << wheel.width_m << "|" << load_n << "|"
+              << static_cast<int>(schedule.ending) << "|" << schedule.constant_slip << "|"
+              << schedule.hold_s << "|" << schedule.Duration() << "|"
+              << options.rolling_damping_per_s;
+  int first_step = 0;
+  std::uint64_t generation = 0;
+  if (checkpointing) {
+    if (std::optional<RunState> saved = ReadRunState(state_path, fingerprint.str())) {
+      bin->RestoreState(saved->bin_state);
+      bin->ReadPointCheckpoint(options.checkpoint_dir, saved->generation);
+      generation = saved->generation;
+      first_step = saved->next_step;
+      hub_z_m = saved->hub_z_m;
+      hub_vz_m_s = saved->hub_vz_m_s;
+      hub_x_m = saved->hub_x_m;
+      towed_angular_speed_rad_s = saved->towed_angular_speed_rad_s;
+      sums = saved->sums;
+      run.samples = std::move(saved->samples);
+    }
+  }
+  auto last_checkpoint = std::chrono::steady_clock::now();
+
+  for (int step = first_step; step < steps; ++step) {
     const double t = bin->time_s();
     Schedule::State state = schedule.At(t);
     if (state.phase == 6) state.angular_speed_rad_s = towed_angular_speed_rad_s;
@@ -208,6 +333,28 @@ RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Sch
     if (step % options.poll_every_steps == 0) {
       if (options.cancelled && options.cancelled()) throw CancelledError();
       if (options.progress) options.progress(static_cast<double>(step) / steps);
+      const auto now = std::chrono::steady_clock::now();
+      if (checkpointing && step + 1 < steps &&
+          std::chrono::duration<double>(now - last_checkpoint).count() >=
+              options.checkpoint_every_s) {
+        // The points first (a new generation, the last two kept), then the run's own state,
+        // which names that generation: a crash between the two resumes from the previous pair.
+        RunState state;
+        state.fingerprint = fingerprint.str();
+        state.generation = ++generation;
+        state.next_step = step + 1;
+        state.hub_z_m = hub_z_m;
+        state.hub_vz_m_s = hub_vz_m_s;
+        state.hub_x_m = hub_x_m;
+        state.towed_angular_speed_rad_s = towed_angular_speed_rad_s;
+        state.sums = sums;
+        state.samples = run.samples;
+        state.bin_state = bin->SaveState();
+        bin->WritePointCheckpoint(options.checkpoint_dir, state.generation);
+        material::checkpoint::WriteFileAtomically(state_path, RunStateBytes(state));
+        last_checkpoint = now;
+        if (options.on_checkpoint) options.on_checkpoint(step + 1);
+      }
     }
   }
   if (options.progress) options.progress(1.0);
@@ -238,6 +385,8 @@ void RigOptions::Validate(const std::string& p) const {
   Require(rolling_damping_per_s >= 0, p + "rolling_damping_per_s", "must not be negative");
   Require(threads >= 1, p + "threads", "must be at least 1");
   Require(poll_every_steps >= 1, p + "poll_every_steps", "must be at least 1");
+  Require(checkpoint_every_s >= 0 && std::isfinite(checkpoint_every_s), p + "checkpoint_every_s",
+          "must be a finite number of seconds >= 0");
 }
 
 FeSoilBinFactory FeClassicBins(const FeSoil& soil, const RigOptions& options) {

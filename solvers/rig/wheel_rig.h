@@ -62,6 +62,15 @@ struct RigOptions {
   // Steps between cancellation polls and progress reports: cheap steps poll seldom, expensive
   // ones (an RVE per element) often, so a cancel takes effect within seconds.
   int poll_every_steps = 200;
+  // Checkpoints, on bins that can (SoilBin::SaveState; the FE wheel bins): with checkpoint_dir
+  // set (an existing directory), the run writes its state there at a poll step once
+  // checkpoint_every_s of wall time has passed since the last, and a run that finds a checkpoint
+  // of the same run there (same bin, step and procedure) resumes from it: its curve is the same,
+  // bit for bit, as an uninterrupted run's. A checkpoint of another run is ignored (and replaced).
+  std::string checkpoint_dir;
+  double checkpoint_every_s = 60;
+  // Called after each checkpoint with the FE steps done (tests, logs); may be empty.
+  std::function<void(int steps_done)> on_checkpoint;
   void Validate(const std::string& field_prefix) const;
 };
 

@@ -16,6 +16,7 @@ void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& opti
   tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(options.fe_de_preset);
   fe_de.ranks = options.fe_de_ranks;
   fe_de.threads = options.fe_de_threads;
+  fe_de.checkpoint_every_s = options.fe_de_checkpoint_every_s;
   registry.Register(std::make_unique<tiers::FeDeTier>(fe_de));
 }
 

@@ -12,6 +12,7 @@ struct BuiltinTierOptions {
   std::string fe_de_preset = "default";  // tiers::FeDeOptions::Preset
   int fe_de_ranks = 2;                   // MPI ranks of one fe-de task (--ranks-per-task)
   int fe_de_threads = 1;                 // OpenMP threads per rank of an fe-de task
+  double fe_de_checkpoint_every_s = 60;  // wall seconds between an fe-de task's checkpoints
 };
 
 // Throws InputError naming the option for a bad value.

@@ -51,6 +51,8 @@ void FeDeOptions::Validate(const std::string& p) const {
   balance.Validate(p + "balance.");
   Require(std::isfinite(min_initial_pressure_pa) && min_initial_pressure_pa > 0,
           p + "min_initial_pressure_pa", "must be a positive pressure, Pa");
+  Require(std::isfinite(checkpoint_every_s) && checkpoint_every_s >= 0, p + "checkpoint_every_s",
+          "must be a finite number of seconds >= 0");
   Require(ranks >= 1 && ranks <= 4096, p + "ranks", "must lie in [1, 4096]");
   Require(threads >= 1 && threads <= 1024, p + "threads", "must lie in [1, 1024]");
 }
@@ -205,6 +207,8 @@ FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext
   rig_options.threads = context.threads;
   rig_options.progress = context.progress;
   rig_options.poll_every_steps = 20;  // an FE-DE step costs tens of ms: a cancel within a second
+  rig_options.checkpoint_dir = context.checkpoint_dir;
+  rig_options.checkpoint_every_s = options_.checkpoint_every_s;
   // Collective: the servers take part in the pool's cancellation check at the same point.
   rig_options.cancelled = [&]() {
     if (link) link->Call(kCallCancelCheck);

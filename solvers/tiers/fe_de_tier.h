@@ -42,6 +42,9 @@ struct FeDeOptions {
   rig::DrawbarPullProcedure procedure;  // seed 001's
   dem::rve::RveNumerics numerics;
   bridge::BalanceOptions balance;
+  // With ComputeContext::checkpoint_dir set, the FE state and every RVE (per rank) are written
+  // there this often (wall seconds), and a run of the same request resumes from them.
+  double checkpoint_every_s = 60;
   int ranks = 2;    // MPI ranks of one task (TierNeeds::ranks): the FE rank and RVE servers
   int threads = 1;  // OpenMP threads per rank over its RVEs
 

@@ -45,6 +45,14 @@ int CsvRows(const std::string& out) {
   return rows;
 }
 
+// The CSV of the first test's uninterrupted curve, for the resume test.
+std::string* uninterrupted_csv = nullptr;
+
+std::string CsvPart(const std::string& out) {
+  const std::size_t header = out.find("slip,drawbar_pull_n");
+  return header == std::string::npos ? std::string() : out.substr(header);
+}
+
 const char kWheel[] =
     "curve --tier fe-de --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
     "--section-height 0.1 --wheel-load 1000 --slip-step 0.25";
@@ -64,6 +72,7 @@ TEST(FeDeService, CurveJobOnARankGroupThenFromTheCacheAndCancelFreesTheGroup) {
   ASSERT_EQ(first.exit_code, 0) << first.out;
   EXPECT_NE(first.out.find("curve job job-"), std::string::npos) << first.out;
   EXPECT_EQ(CsvRows(first.out), 5) << first.out;
+  uninterrupted_csv = new std::string(CsvPart(first.out));
   std::printf("  fe-de ci curve through the service: %.1f s\n", first_s);
 
   const CliRun again = Gonogo(server.endpoint(), kWheel);
@@ -97,6 +106,57 @@ TEST(FeDeService, CurveJobOnARankGroupThenFromTheCacheAndCancelFreesTheGroup) {
                               "--wheel-width 0.2 --section-height 0.1 --wheel-load 1000");
   EXPECT_EQ(after.exit_code, 0) << after.out;
   EXPECT_EQ(server.Terminate(), 0);
+}
+
+// kill -9 of the whole MPI job mid-curve; the restarted server resumes the curve job from the last
+// checkpoint (FE state and every RVE) and ends with the uninterrupted curve.
+TEST(FeDeService, AKilledServerResumesTheCurveFromItsCheckpointToTheSameCurve) {
+  ScratchDir dir("fe-de-resume");
+  const std::vector<std::string> flags = {"--fe-de-preset", "ci", "--ranks-per-task", "2",
+                                          "--fe-de-checkpoint-s", "5"};
+  std::string id;
+  double fraction_at_kill = 0;
+  {
+    ServerProcess server(dir.path(), flags, 3);
+    const CliRun submitted = Gonogo(server.endpoint(), std::string(kWheel) + " --no-wait");
+    ASSERT_EQ(submitted.exit_code, 0) << submitted.out;
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(submitted.out, match, std::regex("job-[0-9a-f-]+")))
+        << submitted.out;
+    id = match.str();
+    auto stub = server.Stub();
+    for (int i = 0; i < 1200 && fraction_at_kill < 0.5; ++i) {
+      grpc::ClientContext ctx;
+      v1::GetJobRequest req;
+      req.set_job_id(id);
+      v1::Job now;
+      stub->GetJob(&ctx, req, &now);
+      fraction_at_kill = now.status().fraction_done();
+      std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    }
+    ASSERT_GE(fraction_at_kill, 0.5) << "the curve should be half done within 5 minutes";
+    ASSERT_LT(fraction_at_kill, 1.0) << "progress streams from the group leader while it runs";
+    ASSERT_TRUE(fs::exists(dir.path() / "checkpoints")) << "a checkpoint every 5 s";
+    server.Kill();
+  }
+  ServerProcess again(dir.path(), flags, 3);
+  EXPECT_NE(again.banner().find("1 jobs resumed"), std::string::npos) << again.banner();
+  const auto resumed_start = std::chrono::steady_clock::now();
+  const CliRun watched = Gonogo(again.endpoint(), "watch " + id);
+  const double resumed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - resumed_start).count();
+  EXPECT_NE(watched.out.find("DONE"), std::string::npos) << watched.out;
+  std::printf("  killed at %.0f %%, resumed to the end in %.1f s\n", 100 * fraction_at_kill,
+              resumed_s);
+  const CliRun curve = Gonogo(again.endpoint(), std::string(kWheel) + " --csv");
+  ASSERT_EQ(curve.exit_code, 0) << curve.out;
+  if (uninterrupted_csv != nullptr) {
+    EXPECT_EQ(CsvPart(curve.out), *uninterrupted_csv) << "the resumed curve is the same";
+  }
+  const fs::path restart_files = dir.path() / "checkpoints";
+  EXPECT_TRUE(!fs::exists(restart_files) || fs::is_empty(restart_files))
+      << "restart files are removed once the curve is stored";
+  EXPECT_EQ(again.Terminate(), 0);
 }
 
 }  // namespace

@@ -217,12 +217,12 @@ TEST(DistributedPointStore, MovesPointsOffTheRankThatMeasuresSlowest) {
     DistributedPointStore store(link, model, balance);
     const int points = 12;
     const std::vector<PointHandle> handles = store.Create(points);
-    // Round-robin: rank 1 owns 1, 4, 7, 10. Those four get expensive increments (10 ms each), the
-    // rest cheap ones (0.2 ms).
+    // Round-robin: rank 1 owns 1, 4, 7, 10. Those four get expensive increments (20 ms each), the
+    // rest cheap ones (0.1 ms): a contrast that preemption on a loaded machine does not hide.
     std::vector<Matrix3> increments;
     for (PointHandle h : handles) {
       ASSERT_EQ(store.Owner(h), static_cast<int>(h % GroupSize()));
-      increments.push_back(Matrix3::Identity() * (h % GroupSize() == 1 ? 0.05 : 0.001));
+      increments.push_back(Matrix3::Identity() * (h % GroupSize() == 1 ? 0.1 : 0.0005));
     }
     for (int step = 0; step < 3; ++step) {
       store.TryUpdate(handles, increments, false);
@@ -236,7 +236,9 @@ TEST(DistributedPointStore, MovesPointsOffTheRankThatMeasuresSlowest) {
                                          << history[0].rank_seconds[2];
     EXPECT_GT(history[0].points_moved, 0);
     EXPECT_LT(history[0].imbalance_after, history[0].imbalance);
-    EXPECT_LT(history[2].imbalance, 0.5 * history[0].imbalance) << "measured after the moves";
+    EXPECT_LT(history[2].imbalance, 0.75 * history[0].imbalance)
+        << "measured after the moves; seconds " << history[2].rank_seconds[0] << " "
+        << history[2].rank_seconds[1] << " " << history[2].rank_seconds[2];
     EXPECT_GT(history[0].bytes_sent, 0);
     EXPECT_GT(history[0].bytes_received, 0);
   });
@@ -291,18 +293,22 @@ TEST(DistributedPointStore, CheckpointIsReadBackUnderAnotherOwnership) {
       DistributedPointStore first(link, *model, BalanceOptions{});
       const std::vector<PointHandle> handles = first.Create(points);
       for (int step = 0; step < 12; ++step) {
-        if (step == 6) first.WriteCheckpoint(directory);
-        if (step == 4) first.WriteCheckpoint(directory);  // an older generation, replaced at 6
+        if (step == 2) first.WriteCheckpoint(directory, 1);
+        if (step == 4) first.WriteCheckpoint(directory, 2);
+        if (step == 6) first.WriteCheckpoint(directory, 3);  // removes generation 1
         expected = first.TryUpdate(handles, path[step], true);
         first.Commit(handles);
       }
     }
-    EXPECT_FALSE(std::filesystem::exists(directory + "/points.1.0.bin")) << "old generation kept";
+    EXPECT_FALSE(std::filesystem::exists(directory + "/points.1.0.bin")) << "the last two stay";
+    EXPECT_FALSE(std::filesystem::exists(directory + "/points.1.manifest"));
+    EXPECT_TRUE(std::filesystem::exists(directory + "/points.2.2.bin"));
+    EXPECT_TRUE(std::filesystem::exists(directory + "/points.3.manifest"));
     BalanceOptions other;
     other.rank_zero_owns_points = false;  // every point on another rank than before
     DistributedPointStore second(link, *model, other);
     const std::vector<PointHandle> handles = second.Create(points);
-    second.ReadCheckpoint(directory);
+    second.ReadCheckpoint(directory, 3);
     std::vector<TrialResponse> got;
     for (int step = 6; step < 12; ++step) {
       got = second.TryUpdate(handles, path[step], true);
@@ -313,14 +319,25 @@ TEST(DistributedPointStore, CheckpointIsReadBackUnderAnotherOwnership) {
     // A damaged points file is refused and nothing is replaced.
     const std::string before = second.Serialize(3);
     {
-      std::ofstream damage(directory + "/points.2.1.bin", std::ios::binary | std::ios::trunc);
+      std::ofstream damage(directory + "/points.3.1.bin", std::ios::binary | std::ios::trunc);
       damage << "GNGPTS01 garbage";
     }
-    EXPECT_THROW(second.ReadCheckpoint(directory), InputError);
+    EXPECT_THROW(second.ReadCheckpoint(directory, 3), InputError);
+    EXPECT_THROW(second.ReadCheckpoint(directory, 1), InputError) << "removed";
     EXPECT_EQ(second.Serialize(3), before);
     DistributedPointStore wrong_size(link, *model, BalanceOptions{});
     wrong_size.Create(points + 1);
-    EXPECT_THROW(wrong_size.ReadCheckpoint(directory), InputError);
+    EXPECT_THROW(wrong_size.ReadCheckpoint(directory, 2), InputError);
+    // A local store reads the group's checkpoint and continues bit for bit.
+    LocalPointStore local(*model);
+    local.Create(points);
+    local.ReadCheckpoint(directory, 2);
+    EXPECT_EQ(local.Serialize(7), [&] {
+      DistributedPointStore third(link, *model, BalanceOptions{});
+      third.Create(points);
+      third.ReadCheckpoint(directory, 2);
+      return third.Serialize(7);
+    }());
   });
   if (Rank() == 0) std::filesystem::remove_all(directory);
 }

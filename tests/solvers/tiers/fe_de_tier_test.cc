@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 
 #include "solvers/common/errors.h"
@@ -41,6 +42,9 @@ TractionRequest Request() {
   request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
   return request;
 }
+
+// The tiny configuration's curve computed alone (the first test's; computed on demand).
+TractionCurve* reference_curve = nullptr;
 
 bool SameBits(const TractionCurve& a, const TractionCurve& b) {
   if (a.points.size() != b.points.size() || a.immobile_reason != b.immobile_reason) return false;
@@ -88,6 +92,7 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   const TractionCurve on_three = RunOn(tier, MPI_COMM_WORLD, 1);
   if (rank != 0) return;
   ASSERT_EQ(alone.points.size(), 5u) << alone.immobile_reason;
+  reference_curve = new TractionCurve(alone);
   EXPECT_TRUE(SameBits(on_two, alone));
   EXPECT_TRUE(SameBits(on_three, alone));
   for (const TractionPoint& p : alone.points) {
@@ -121,6 +126,67 @@ TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
   int one = 1, sum = 0;
   MPI_Allreduce(&one, &sum, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(sum, 3);
+}
+
+// A run stopped mid-curve (here cancelled after its checkpoints, as a crash or a drain stops it)
+// resumes from its checkpoint directory on a group of another size, to the same curve bit for bit
+// as the uninterrupted run.
+TEST(FeDeTier, ResumesFromItsCheckpointOnAnotherGroupToTheSameCurve) {
+  const int rank = WorldRank();
+  FeDeOptions options = TinyOptions();
+  options.checkpoint_every_s = 0;  // at every poll (20 FE steps)
+  const FeDeTier tier(options);
+  if (rank == 0 && reference_curve == nullptr) {
+    reference_curve = new TractionCurve(RunOn(FeDeTier(TinyOptions()), MPI_COMM_NULL, 1));
+  }
+  char path[64] = "/tmp/gonogo_fe_de_resume_XXXXXX";
+  if (rank == 0) {
+    ASSERT_NE(mkdtemp(path), nullptr);
+  }
+  MPI_Bcast(path, sizeof path, MPI_CHAR, 0, MPI_COMM_WORLD);
+
+  int checks = 0;
+  ComputeContext first;
+  first.communicator = MPI_COMM_WORLD;
+  first.checkpoint_dir = path;
+  first.cancelled = [&]() {  // stop at the 20th poll, about 400 of the run's 900 FE steps
+    ++checks;
+    int mine = rank == 0 && checks >= 20 ? 1 : 0;
+    int any = 0;
+    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);
+    return any != 0;
+  };
+  EXPECT_THROW(tier.Compute(Request(), first), CancelledError);
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank == 0) {
+    for (const char* file : {"/rig.state", "/points.19.manifest", "/points.19.2.bin",
+                             "/points.18.manifest"}) {
+      EXPECT_TRUE(std::filesystem::exists(std::string(path) + file)) << file;
+    }
+    EXPECT_FALSE(std::filesystem::exists(std::string(path) + "/points.17.manifest"));
+  }
+
+  MPI_Comm pair = MPI_COMM_NULL;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < 2 ? 0 : MPI_UNDEFINED, rank, &pair);
+  if (pair != MPI_COMM_NULL) {
+    ComputeContext second;
+    second.communicator = pair;
+    second.checkpoint_dir = path;
+    FeDeOptions no_more = TinyOptions();
+    no_more.checkpoint_every_s = 1e9;
+    const auto start = std::chrono::steady_clock::now();
+    const TractionCurve resumed = FeDeTier(no_more).Compute(Request(), second);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    MPI_Comm_free(&pair);
+    if (rank == 0) {
+      std::cout << "  resumed run: " << seconds << " s\n";
+      ASSERT_NE(reference_curve, nullptr);
+      EXPECT_TRUE(SameBits(resumed, *reference_curve));
+      std::filesystem::remove_all(path);
+    }
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
 }
 
 }  // namespace
