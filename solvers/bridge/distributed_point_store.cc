@@ -183,6 +183,36 @@ void GetTrial(ByteReader& in, TrialResponse& trial, double& seconds) {
   in.Get(seconds);
 }
 
+// A migrating point's message: its handle, whether its state could be read, then the state or
+// why not. The receiver always gets one message per move, so a failure cannot leave it waiting.
+std::string StateMessage(PointHandle handle, const std::function<std::string()>& serialize) {
+  ByteWriter out;
+  out.Put(static_cast<std::int64_t>(handle));
+  try {
+    std::string state = serialize();
+    out.Put(static_cast<std::uint8_t>(1));
+    out.PutBlob(state);
+  } catch (const std::exception& e) {
+    out.Put(static_cast<std::uint8_t>(0));
+    out.PutBlob(std::string("point ") + std::to_string(handle) + ": " + e.what());
+  }
+  return out.Take();
+}
+
+// The state in a StateMessage for `expected`; throws when it carries an error or another point.
+std::string StateFromMessage(const std::string& message, PointHandle expected) {
+  ByteReader in(message);
+  std::int64_t handle = 0;
+  std::uint8_t ok = 0;
+  std::string payload;
+  in.Get(handle);
+  in.Get(ok);
+  in.GetBlob(payload);
+  if (handle != expected) throw std::logic_error("migration out of order");
+  if (!ok) throw std::runtime_error(payload);
+  return payload;
+}
+
 // The points of `wanted` from a checkpoint, restored through `model`.
 std::unordered_map<PointHandle, std::unique_ptr<MaterialState>> LoadCheckpointPoints(
     const ConstitutiveModel& model, const std::string& directory, std::uint64_t generation,
@@ -420,6 +450,7 @@ class Server {
     std::vector<std::string> outgoing;
     std::vector<MPI_Request> requests;
     std::vector<std::pair<PointHandle, int>> incoming;
+    std::vector<PointHandle> given;
     outgoing.reserve(count);
     for (std::uint64_t k = 0; k < count; ++k) {
       std::int64_t handle = 0;
@@ -428,10 +459,9 @@ class Server {
       in.Get(from);
       in.Get(to);
       if (from == rank_) {
-        ByteWriter out;
-        out.Put(handle);
-        out.PutBlob(Point(store, handle).committed->Serialize());
-        outgoing.push_back(out.Take());
+        outgoing.push_back(
+            StateMessage(handle, [&] { return Point(store, handle).committed->Serialize(); }));
+        given.push_back(handle);
         requests.emplace_back();
         MPI_Isend(outgoing.back().data(), static_cast<int>(outgoing.back().size()), MPI_BYTE, to,
                   kTagState, comm_, &requests.back());
@@ -443,29 +473,14 @@ class Server {
     for (const auto& [handle, from] : incoming) {
       const std::string message = ReceivePolling(comm_, from, kTagState);
       try {
-        ByteReader state_in(message);
-        std::int64_t received = 0;
-        std::string bytes;
-        state_in.Get(received);
-        state_in.GetBlob(bytes);
-        if (received != handle) throw std::logic_error("migration out of order");
-        store.points[handle].committed = model_.RestoreState(bytes);
+        store.points[handle].committed = model_.RestoreState(StateFromMessage(message, handle));
       } catch (const std::exception& e) {
         if (error.empty()) error = e.what();
       }
     }
     MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
     if (!error.empty()) throw std::runtime_error("migration: " + error);
-    ForgetGiven(store, outgoing);
-  }
-
-  static void ForgetGiven(ServedStore& store, const std::vector<std::string>& outgoing) {
-    for (const std::string& message : outgoing) {
-      ByteReader in(message);
-      std::int64_t handle = 0;
-      in.Get(handle);
-      store.points.erase(handle);
-    }
+    for (PointHandle handle : given) store.points.erase(handle);
   }
 
   MPI_Comm comm_;
@@ -551,6 +566,18 @@ std::string ExpectOk(const std::string& reply) {
   return reply.substr(1);
 }
 
+// One `command` per server with the handles it holds among `per_rank` (indexed by group rank;
+// rank 0's own are not sent).
+void SendHandlesTo(RankGroupLink& group, Command command, std::int64_t store_id,
+                   const std::vector<std::vector<PointHandle>>& per_rank) {
+  for (int r = 1; r < group.size(); ++r) {
+    if (per_rank[r].empty()) continue;
+    ByteWriter out = CommandHeader(command, store_id);
+    out.PutVector(per_rank[r]);
+    group.Send(r, out.Take());
+  }
+}
+
 }  // namespace
 
 DistributedPointStore::DistributedPointStore(std::shared_ptr<RankGroupLink> group,
@@ -611,12 +638,7 @@ std::vector<PointHandle> DistributedPointStore::Create(std::int64_t count) {
     per_rank[owner].push_back(handle);
     handles.push_back(handle);
   }
-  for (int r = 1; r < group_->size(); ++r) {
-    if (per_rank[r].empty()) continue;
-    ByteWriter out = CommandHeader(Command::kCreate, id_);
-    out.PutVector(per_rank[r]);
-    group_->Send(r, out.Take());
-  }
+  SendHandlesTo(*group_, Command::kCreate, id_, per_rank);
   return handles;
 }
 
@@ -724,12 +746,7 @@ void DistributedPointStore::Commit(const std::vector<PointHandle>& handles) {
       per_rank[owner].push_back(handle);
     }
   }
-  for (int r = 1; r < group_->size(); ++r) {
-    if (per_rank[r].empty()) continue;
-    ByteWriter out = CommandHeader(Command::kCommit, id_);
-    out.PutVector(per_rank[r]);
-    group_->Send(r, out.Take());
-  }
+  SendHandlesTo(*group_, Command::kCommit, id_, per_rank);
   ++commits_since_rebalance_;
   if (balance_.enabled && commits_since_rebalance_ >= balance_.min_commits_between &&
       !history_->empty() && history_->back().imbalance > balance_.threshold) {
@@ -748,12 +765,7 @@ void DistributedPointStore::Discard(const std::vector<PointHandle>& handles) {
       per_rank[owner].push_back(handle);
     }
   }
-  for (int r = 1; r < group_->size(); ++r) {
-    if (per_rank[r].empty()) continue;
-    ByteWriter out = CommandHeader(Command::kDiscard, id_);
-    out.PutVector(per_rank[r]);
-    group_->Send(r, out.Take());
-  }
+  SendHandlesTo(*group_, Command::kDiscard, id_, per_rank);
 }
 
 std::string DistributedPointStore::Serialize(PointHandle handle) const {
@@ -820,7 +832,11 @@ void DistributedPointStore::Rebalance() {
     PointHandle best = -1;
     double best_distance = 0;
     for (std::size_t p = 0; p < new_owner.size(); ++p) {
-      if (new_owner[p] != most || cost_seconds_[p] <= 0 || cost_seconds_[p] >= gap) continue;
+      // A point moves at most once per rebalance: the move list names where it is now.
+      if (owner_[p] != most || new_owner[p] != most || cost_seconds_[p] <= 0 ||
+          cost_seconds_[p] >= gap) {
+        continue;
+      }
       const double distance = std::abs(cost_seconds_[p] - 0.5 * gap);
       if (best < 0 || distance < best_distance) {
         best = static_cast<PointHandle>(p);
@@ -854,10 +870,10 @@ void DistributedPointStore::Rebalance() {
   std::vector<MPI_Request> requests;
   for (const auto& [handle, from, to] : moves) {
     if (from != 0) continue;
-    ByteWriter out;
-    out.Put(static_cast<std::int64_t>(handle));
-    out.PutBlob(local_committed_[handle]->Serialize());
-    outgoing.push_back(out.Take());
+    outgoing.push_back(StateMessage(handle, [&, h = handle] {
+      if (local_committed_[h] == nullptr) throw std::logic_error("not on rank 0");
+      return local_committed_[h]->Serialize();
+    }));
     requests.emplace_back();
     MPI_Isend(outgoing.back().data(), static_cast<int>(outgoing.back().size()), MPI_BYTE, to,
               kTagState, group_->communicator(), &requests.back());
@@ -865,13 +881,7 @@ void DistributedPointStore::Rebalance() {
   for (const auto& [handle, from, to] : moves) {
     if (to != 0) continue;
     const std::string message = ReceivePolling(group_->communicator(), from, kTagState);
-    ByteReader in(message);
-    std::int64_t received = 0;
-    std::string bytes;
-    in.Get(received);
-    in.GetBlob(bytes);
-    if (received != handle) throw std::logic_error("migration out of order");
-    local_committed_[handle] = model_.RestoreState(bytes);
+    local_committed_[handle] = model_.RestoreState(StateFromMessage(message, handle));
   }
   MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
   for (const auto& [handle, from, to] : moves) {

@@ -16,22 +16,6 @@
 namespace gonogo::testing {
 namespace {
 
-struct CliRun {
-  int exit_code;
-  std::string out;  // stdout and stderr together
-};
-
-CliRun Gonogo(const std::string& endpoint, const std::string& args) {
-  const std::string cmd =
-      BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
 class CliTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

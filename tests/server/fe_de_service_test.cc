@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -16,22 +17,6 @@
 
 namespace gonogo::testing {
 namespace {
-
-struct CliRun {
-  int exit_code;
-  std::string out;  // stdout and stderr together
-};
-
-CliRun Gonogo(const std::string& endpoint, const std::string& args) {
-  const std::string cmd =
-      BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
 
 int CsvRows(const std::string& out) {
   int rows = 0;
@@ -78,6 +63,37 @@ TEST(FeDeService, CurveJobOnARankGroupThenFromTheCacheAndCancelFreesTheGroup) {
   const CliRun again = Gonogo(server.endpoint(), kWheel);
   ASSERT_EQ(again.exit_code, 0) << again.out;
   EXPECT_NE(again.out.find("from the cache"), std::string::npos) << again.out;
+
+  // A map on fe-de: every soil class on the DE soil, a one-axle vehicle whose wheels carry the
+  // curve's 1000 N on the same tyre, so the map's one fe-de curve is the one just computed.
+  ASSERT_TRUE(MakeSampleTerrain(dir.path() / "terrain", 8));
+  const fs::path terrain = dir.path() / "terrain";
+  std::ofstream(terrain / "de_soils.json") << R"({"classes": [
+    {"code": 1, "name": "sand", "remolding_index": 0.9, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 2, "name": "silt loam", "remolding_index": 0.75, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 3, "name": "clay", "remolding_index": 0.55, "bekker_soil": "seed000_sand_rve100"}]})";
+  std::ofstream(terrain / "small_wheels.json") << R"({"name": "rig wheel pair",
+    "mass_kg": 203.9432, "axles": [{"load_fraction": 1.0, "wheels": 2, "driven": true,
+      "tyre": {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}}],
+    "drive_power_w": 5000, "max_speed_kmh": 20, "driveline_efficiency": 0.85,
+    "ground_clearance_m": 0.2})";
+  const std::string out = (dir.path() / "map").string();
+  const CliRun map = Gonogo(
+      server.endpoint(),
+      "map --cone-index " + (terrain / "cone_index.tif").string() + " --elevation " +
+          (terrain / "elevation.tif").string() + " --soil-class " +
+          (terrain / "soil_class.tif").string() + " --soil-table " +
+          (terrain / "de_soils.json").string() + " --vehicle " +
+          (terrain / "small_wheels.json").string() +
+          " --tier fe-de --slip-step 0.25 --out " + out);
+  ASSERT_EQ(map.exit_code, 0) << map.out;
+  for (const char* product : {"gonogo.tif", "speed.tif", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / product)) << product;
+  }
+  const std::string summary = ReadFile(fs::path(out) / "summary.json");
+  EXPECT_NE(summary.find("fe-de"), std::string::npos) << summary;
+  EXPECT_NE(map.out.find("tasks 1/1  cache hits 1"), std::string::npos)
+      << "one distinct soil and wheel: the curve above, from the cache: " << map.out;
 
   // Another wheel load: a new curve. Cancel it once it is under way.
   const std::string heavier =

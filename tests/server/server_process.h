@@ -61,6 +61,13 @@ class ServerProcess {
   std::string banner_;
 };
 
+// The `gonogo` command line against `endpoint`, stdout and stderr together, and its exit code.
+struct CliRun {
+  int exit_code;
+  std::string out;
+};
+CliRun Gonogo(const std::string& endpoint, const std::string& args);
+
 struct MapFiles {
   std::string cone_index, slope, elevation, soil_class, soil_table;
 };
