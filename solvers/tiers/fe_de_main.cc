@@ -35,7 +35,8 @@ struct CommandLine {
   std::string preset = "default";
   double elements_per_radius = 0, fe_time_step_s = 0, inertial_number = 0, balance_threshold = -1;
   double slip_ramp_s = 0, self_propelled_s = 0;
-  int min_de_steps = 0, relax_steps = 0, threads = 1;
+  int min_de_steps = 0, threads = 1;
+  int relax_steps = -1;  // -1: the preset's; 0 is a valid choice (no relaxation)
   std::string balance_csv;
 };
 
@@ -45,7 +46,7 @@ int Run(const CommandLine& line, int rank) {
   if (line.fe_time_step_s > 0) options.fe_time_step_s = line.fe_time_step_s;
   if (line.inertial_number > 0) options.numerics.max_inertial_number = line.inertial_number;
   if (line.min_de_steps > 0) options.numerics.min_steps_per_increment = line.min_de_steps;
-  if (line.relax_steps > 0) options.numerics.relax_steps = line.relax_steps;
+  if (line.relax_steps >= 0) options.numerics.relax_steps = line.relax_steps;
   if (line.balance_threshold >= 0) options.balance.threshold = line.balance_threshold;
   if (line.slip_ramp_s > 0) options.procedure.slip_ramp_s = line.slip_ramp_s;
   if (line.self_propelled_s > 0) options.procedure.self_propelled_s = line.self_propelled_s;
@@ -145,7 +146,9 @@ int main(int argc, char** argv) {
   app.add_option("--fe-time-step", line.fe_time_step_s, "FE step by mass scaling, s")
       ->check(finite);
   app.add_option("--min-de-steps", line.min_de_steps, "DE steps at least per FE increment");
-  app.add_option("--relax-steps", line.relax_steps, "DE steps with the cell held after each");
+  app.add_option("--relax-steps", line.relax_steps,
+                 "DE steps with the cell held after each increment (0: none)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--inertial-number", line.inertial_number, "DE strain-rate cap")->check(finite);
   app.add_option("--balance-threshold", line.balance_threshold,
                  "migrate RVEs when max / mean - 1 of the ranks' RVE seconds exceeds it")
