@@ -566,6 +566,20 @@ std::string ExpectOk(const std::string& reply) {
   return reply.substr(1);
 }
 
+// Reads one reply from every server (or those marked in `only`), keeping the first error in
+// `first_error` (unless it already holds one): every reply is read even after an error, so no
+// message is left behind for the next command.
+void CollectReplies(RankGroupLink& group, const std::vector<char>* only, std::string& first_error) {
+  for (int r = 1; r < group.size(); ++r) {
+    if (only != nullptr && !(*only)[r]) continue;
+    try {
+      ExpectOk(group.Receive(r));
+    } catch (const std::exception& e) {
+      if (first_error.empty()) first_error = e.what();
+    }
+  }
+}
+
 // One `command` per server with the handles it holds among `per_rank` (indexed by group rank;
 // rank 0's own are not sent).
 void SendHandlesTo(RankGroupLink& group, Command command, std::int64_t store_id,
@@ -888,14 +902,7 @@ void DistributedPointStore::Rebalance() {
     if (from == 0) local_committed_[handle].reset();
   }
   std::string first_error;
-  for (int r = 1; r < group_->size(); ++r) {
-    if (!involved[r]) continue;
-    try {
-      ExpectOk(group_->Receive(r));
-    } catch (const std::exception& e) {
-      if (first_error.empty()) first_error = e.what();
-    }
-  }
+  CollectReplies(*group_, &involved, first_error);
   if (!first_error.empty()) throw std::runtime_error(first_error);
   owner_ = std::move(new_owner);
   StepBalance& last = history_->back();
@@ -921,13 +928,7 @@ void DistributedPointStore::WriteCheckpoint(const std::string& directory,
   } catch (const std::exception& e) {
     first_error = e.what();
   }
-  for (int r = 1; r < group_->size(); ++r) {
-    try {
-      ExpectOk(group_->Receive(r));
-    } catch (const std::exception& e) {
-      if (first_error.empty()) first_error = e.what();
-    }
-  }
+  CollectReplies(*group_, nullptr, first_error);
   if (!first_error.empty()) throw std::runtime_error("checkpoint not written: " + first_error);
   checkpoint::Manifest manifest;
   manifest.generation = generation;
@@ -965,13 +966,7 @@ void DistributedPointStore::ReadCheckpoint(const std::string& directory,
   } catch (const std::exception& e) {
     first_error = e.what();
   }
-  for (int r = 1; r < group_->size(); ++r) {
-    try {
-      ExpectOk(group_->Receive(r));
-    } catch (const std::exception& e) {
-      if (first_error.empty()) first_error = e.what();
-    }
-  }
+  CollectReplies(*group_, nullptr, first_error);
   const std::string finish =
       CommandHeader(first_error.empty() ? Command::kApplyCheckpoint : Command::kDropCheckpoint,
                     id_)
