@@ -16,8 +16,8 @@ packages=(
   libcli11-dev libspdlog-dev
   # drawing the PNG plots and quicklooks (server/geo), and their font
   libcairo2-dev fonts-dejavu-core
-  # tests
-  libgtest-dev libgmock-dev
+  # tests; the products opened in QGIS (offscreen) and the STAC item checked against its schema
+  libgtest-dev libgmock-dev python3-qgis python3-jsonschema
 )
 
 missing=()

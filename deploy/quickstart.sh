@@ -27,7 +27,7 @@ echo "gonogo-server at $(cat "$endpoint_file") (log: out/gonogo-server.log)"
   --cone-index "$terrain/cone_index.tif" --elevation "$terrain/elevation.tif" \
   --soil-class "$terrain/soil_class.tif" --soil-table "$terrain/soil_table.json" \
   --vehicle "$root/clients/vehicles/fed_alpha.json" --tier empirical --out "$out" \
-  --name "sample terrain, FED Alpha"
+  --name "sample terrain"
 
 echo
 echo "Products in $out:"

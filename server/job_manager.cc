@@ -433,12 +433,10 @@ void JobManager::RunJob(const std::string& id) {
                      computed_by, vci_pa, criteria,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};
     const std::string summary = BuildSummaryJson(si);
-    geo::WriteMapProducts(terrain->grid, verdicts.go_class, verdicts.speed_kmh,
-                          ProductMetadata(si), out_dir.string());
-    std::ofstream(out_dir / "summary.json") << summary << "\n";
+    const std::vector<std::string> products =
+        WriteJobProducts(si, summary, UtcNowRfc3339(), out_dir.string());
     status.set_fraction_done(1.0);
-    Finish(id, cache::JobState::kDone, "done", summary,
-           {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"});
+    Finish(id, cache::JobState::kDone, "done", summary, products);
   } catch (const std::exception& e) {
     Finish(id, cache::JobState::kFailed, e.what(), "", {});
   }

@@ -2,9 +2,16 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "server/geo/products.h"
 
 namespace gonogo::server {
 
@@ -26,11 +33,15 @@ std::string VehicleHash(const v1::Vehicle& vehicle) {
 namespace {
 
 json CriteriaJson(const mobility::Criteria& c) {
-  return {{"design_slip", c.design_slip}, {"max_slip", c.max_slip}, {"go_margin", c.go_margin},
-          {"passes", c.passes},           {"slip_step", c.slip_step}};
+  return {{"design_slip", c.design_slip},
+          {"max_slip", c.max_slip},
+          {"go_margin", c.go_margin},
+          {"passes", c.passes},
+          {"slip_step", c.slip_step}};
 }
 
-// Rounds to `decimals` places so that the JSON prints the short decimal (27.99, not 27.990000000000002).
+// Rounds to `decimals` places so that the JSON prints the short decimal (27.99,
+// not 27.990000000000002).
 double Round(double v, int decimals) {
   const double scale = std::pow(10.0, decimals);
   return std::round(v * scale) / scale;
@@ -85,9 +96,10 @@ std::string BuildSummaryJson(const SummaryInputs& in) {
         {"height", grid.height},
         {"geotransform", grid.geotransform},
         {"crs_wkt", grid.crs_wkt}}},
-      {"cells", {{"total", static_cast<int64_t>(grid.width) * grid.height},
-                 {"valid", valid},
-                 {"no_data", no_data}}},
+      {"cells",
+       {{"total", static_cast<int64_t>(grid.width) * grid.height},
+        {"valid", valid},
+        {"no_data", no_data}}},
       {"valid_area_km2", Round(valid_area / 1e6, 6)},
       {"classes", classes},
       {"mean_speed_kmh", valid ? Round(speed_sum_all / valid, 2) : 0.0},
@@ -115,11 +127,10 @@ std::string BuildSummaryJson(const SummaryInputs& in) {
         {"vehicle_hash", VehicleHash(in.request.vehicle())},
         {"vehicle", json::parse(vehicle_json)},
         {"criteria", CriteriaJson(in.criteria)},
-        {"soft_soil_test",
-         in.soft_soil_vci_pa > 0
-             ? json{{"vehicle_cone_index_kpa", Round(in.soft_soil_vci_pa / 1000.0, 2)},
-                    {"passes", in.criteria.passes}}
-             : json(nullptr)},
+        {"soft_soil_test", in.soft_soil_vci_pa > 0 ? json{{"vehicle_cone_index_kpa",
+                                                           Round(in.soft_soil_vci_pa / 1000.0, 2)},
+                                                          {"passes", in.criteria.passes}}
+                                                   : json(nullptr)},
         {"workers", in.workers}}},
       {"elapsed_s", Round(in.elapsed_s, 3)},
   };
@@ -134,6 +145,57 @@ std::map<std::string, std::string> ProductMetadata(const SummaryInputs& in) {
           {"GONOGO_VEHICLE", in.request.vehicle().name()},
           {"GONOGO_VEHICLE_HASH", VehicleHash(in.request.vehicle())},
           {"GONOGO_CRITERIA", CriteriaJson(in.criteria).dump()}};
+}
+
+std::string MapTitle(const SummaryInputs& in) {
+  const std::string vehicle_and_tier = in.request.vehicle().name() + ", " + in.tier + " tier";
+  if (in.request.name().empty()) return vehicle_and_tier;
+  return in.request.name() + " - " + vehicle_and_tier;
+}
+
+std::string UtcNowRfc3339() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
+
+std::vector<std::string> WriteJobProducts(const SummaryInputs& in, const std::string& summary_json,
+                                          const std::string& datetime_utc,
+                                          const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  const std::string title = MapTitle(in);
+  geo::MapProducts products =
+      geo::WriteMapProducts(in.terrain.grid, in.verdicts.go_class, in.verdicts.speed_kmh,
+                            {title, ProductMetadata(in)}, out_dir);
+  {
+    std::ofstream out(fs::path(out_dir) / "summary.json");
+    out << summary_json << "\n";
+    if (!out.flush()) throw std::runtime_error("cannot write summary.json in " + out_dir);
+  }
+  products.files.push_back(
+      {"summary.json", "application/json", {"metadata"}, "Class areas, speeds, provenance"});
+
+  // The catalogue entry carries what a search filters on: the provenance and the class areas.
+  const json summary = json::parse(summary_json);
+  const json properties = {
+      {"description", "Off-road mobility map: go / no-go class and speed per cell"},
+      {"created", datetime_utc},
+      {"gonogo:job_id", in.job_id},
+      {"gonogo:provenance", summary.at("provenance")},
+      {"gonogo:classes", summary.at("classes")},
+      {"gonogo:mean_speed_kmh", summary.at("mean_speed_kmh")},
+      {"gonogo:valid_area_km2", summary.at("valid_area_km2")},
+  };
+  geo::WriteStacItem(in.terrain.grid, {in.job_id, datetime_utc, title, properties.dump()},
+                     products.files, (fs::path(out_dir) / "item.json").string());
+
+  std::vector<std::string> names;
+  for (const geo::ProductFile& file : products.files) names.push_back(file.name);
+  names.push_back("item.json");
+  return names;
 }
 
 }  // namespace gonogo::server

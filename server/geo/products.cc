@@ -1,13 +1,19 @@
-// WriteMapProducts: go/no-go class COG, speed COG and PNG quicklook.
+// WriteMapProducts: class and speed COGs with their QGIS styles and class names, KMZ, quicklook.
 #include "server/geo/products.h"
 
+#include <gdal_rat.h>
+
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <system_error>
 
 #include "server/geo/gdal_util.h"
 #include "server/geo/geodesy.h"
+#include "server/geo/kmz.h"
+#include "server/geo/qgis_style.h"
 #include "server/geo/quicklook.h"
 #include "solvers/common/errors.h"
 
@@ -18,6 +24,20 @@ namespace fs = std::filesystem;
 
 constexpr char kLegend[] = "0=NO-GO;1=SLOW-GO;2=GO;255=no data";
 constexpr char kSpeedUnits[] = "km/h";
+constexpr char kDefaultTitle[] = "Go / no-go map";
+
+// IANA media types, as current catalogues write them.
+constexpr char kCogMediaType[] = "image/tiff; application=geotiff; profile=cloud-optimized";
+constexpr char kXmlMediaType[] = "application/xml";
+constexpr char kKmzMediaType[] = "application/vnd.google-earth.kmz";
+constexpr char kPngMediaType[] = "image/png";
+
+struct ClassName {
+  uint8_t value;
+  const char* name;
+};
+constexpr ClassName kClassNames[] = {
+    {kClassNoGo, "NO-GO"}, {kClassSlowGo, "SLOW-GO"}, {kClassGo, "GO"}};
 
 std::string CellName(size_t index, int width) {
   return "row " + std::to_string(index / width) + " col " + std::to_string(index % width) +
@@ -88,10 +108,44 @@ void WriteCog(GDALDataset& mem, const std::string& path, const char* const* opti
   if (!ok) {
     std::error_code ignored;
     fs::remove(partial, ignored);
+    fs::remove(partial + ".aux.xml", ignored);
     throw std::runtime_error("cannot write " + path + ": " +
                              internal::GdalErrorScope::LastMessage());
   }
+  // GDAL keeps what a TIFF cannot hold (category names, the attribute table) in a PAM sidecar
+  // named after the file; it follows the file to its final name, and appears first.
+  const std::string partial_sidecar = partial + ".aux.xml";
+  if (fs::exists(partial_sidecar)) fs::rename(partial_sidecar, path + ".aux.xml");
   fs::rename(partial, path);
+}
+
+// Category names (GDAL's, read by QGIS as palette labels) and a thematic raster attribute table
+// with value, class name and colour (read by ArcGIS), both for values 0..2.
+void SetClassNames(GDALRasterBand& band) {
+  CPLStringList names;
+  for (const ClassName& c : kClassNames) {
+    while (names.size() < c.value) names.AddString("");
+    names.AddString(c.name);
+  }
+  band.SetCategoryNames(names.List());
+  GDALDefaultRasterAttributeTable table;
+  table.SetTableType(GRTT_THEMATIC);
+  table.CreateColumn("Value", GFT_Integer, GFU_MinMax);
+  table.CreateColumn("Class", GFT_String, GFU_Name);
+  table.CreateColumn("Red", GFT_Integer, GFU_Red);
+  table.CreateColumn("Green", GFT_Integer, GFU_Green);
+  table.CreateColumn("Blue", GFT_Integer, GFU_Blue);
+  int row = 0;
+  for (const ClassName& c : kClassNames) {
+    const internal::Rgba colour = internal::ClassColour(c.value);
+    table.SetValue(row, 0, c.value);
+    table.SetValue(row, 1, c.name);
+    table.SetValue(row, 2, colour.r);
+    table.SetValue(row, 3, colour.g);
+    table.SetValue(row, 4, colour.b);
+    ++row;
+  }
+  band.SetDefaultRAT(&table);
 }
 
 void WriteClassCog(const Grid& grid, const std::vector<uint8_t>& go_class,
@@ -114,6 +168,7 @@ void WriteClassCog(const Grid& grid, const std::vector<uint8_t>& go_class,
   band->SetColorTable(&palette);
   band->SetColorInterpretation(GCI_PaletteIndex);
   band->SetDescription("go_class");
+  SetClassNames(*band);
   SetMetadata(*mem, metadata);
   mem->SetMetadataItem("LEGEND", kLegend);
   // NEAREST overviews keep class codes intact (an average of NO-GO and GO is not SLOW-GO).
@@ -144,33 +199,76 @@ void WriteSpeedCog(const Grid& grid, const std::vector<float>& speed_kmh,
 
 // Drawn with cairo (quicklook.h), written under a temporary name and renamed.
 void WriteQuicklook(const Grid& grid, const std::vector<uint8_t>& go_class,
-                    const std::string& path) {
-  internal::WritePngAtomically(internal::RenderQuicklook(grid.width, grid.height, go_class).get(),
-                               path);
+                    const std::string& title, const std::string& path) {
+  internal::WritePngAtomically(internal::RenderQuicklook(grid, go_class, title).get(), path);
+}
+
+void WriteTextAtomically(const std::string& text, const std::string& path) {
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out.flush()) {
+      std::error_code ignored;
+      fs::remove(partial, ignored);
+      throw std::runtime_error("cannot write " + path);
+    }
+  }
+  fs::rename(partial, path);
+}
+
+double HighestSpeedKmh(const std::vector<float>& speed_kmh) {
+  double highest = 0.0;
+  for (const float v : speed_kmh) {
+    if (!std::isnan(v)) highest = std::max(highest, static_cast<double>(v));
+  }
+  return highest;
 }
 
 }  // namespace
 
 MapProducts WriteMapProducts(const Grid& grid, const std::vector<uint8_t>& go_class,
-                             const std::vector<float>& speed_kmh,
-                             const std::map<std::string, std::string>& metadata,
+                             const std::vector<float>& speed_kmh, const MapDescription& description,
                              const std::string& out_dir) {
   internal::EnsureGdalRegistered();
   internal::GdalErrorScope gdal_errors;
   CheckGrid(grid);
   CheckLayers(grid, go_class, speed_kmh);
-  CheckMetadata(metadata);
+  CheckMetadata(description.metadata);
   Require(!out_dir.empty(), "out_dir", "output directory is empty");
   fs::create_directories(out_dir);
 
-  MapProducts products;
-  products.gonogo_tif = (fs::path(out_dir) / "gonogo.tif").string();
-  products.speed_tif = (fs::path(out_dir) / "speed.tif").string();
-  products.quicklook_png = (fs::path(out_dir) / "quicklook.png").string();
-  WriteClassCog(grid, go_class, metadata, products.gonogo_tif);
-  WriteSpeedCog(grid, speed_kmh, metadata, products.speed_tif);
-  WriteQuicklook(grid, go_class, products.quicklook_png);
-  return products;
+  const std::string title = description.title.empty() ? kDefaultTitle : description.title;
+  const fs::path dir(out_dir);
+  MapProducts p;
+  p.gonogo_tif = (dir / "gonogo.tif").string();
+  p.gonogo_aux_xml = p.gonogo_tif + ".aux.xml";
+  p.gonogo_qml = (dir / "gonogo.qml").string();
+  p.speed_tif = (dir / "speed.tif").string();
+  p.speed_qml = (dir / "speed.qml").string();
+  p.kmz = (dir / "gonogo.kmz").string();
+  p.quicklook_png = (dir / "quicklook.png").string();
+  // Styles first: a reader that sees a raster finds its style already beside it.
+  WriteTextAtomically(internal::ClassStyleQml(), p.gonogo_qml);
+  WriteTextAtomically(
+      internal::SpeedStyleQml(internal::SpeedRampMaxKmh(HighestSpeedKmh(speed_kmh))), p.speed_qml);
+  WriteClassCog(grid, go_class, description.metadata, p.gonogo_tif);
+  if (!fs::exists(p.gonogo_aux_xml)) {
+    throw std::runtime_error("GDAL wrote no " + p.gonogo_aux_xml + " with the class names");
+  }
+  WriteSpeedCog(grid, speed_kmh, description.metadata, p.speed_tif);
+  internal::WriteClassKmz(grid, go_class, title, p.kmz);
+  WriteQuicklook(grid, go_class, title, p.quicklook_png);
+  p.files = {
+      {"gonogo.tif", kCogMediaType, {"data"}, "Go / no-go class: 0 NO-GO, 1 SLOW-GO, 2 GO"},
+      {"gonogo.tif.aux.xml", kXmlMediaType, {"metadata"}, "Class names of gonogo.tif (GDAL PAM)"},
+      {"gonogo.qml", kXmlMediaType, {"metadata"}, "QGIS style of gonogo.tif"},
+      {"speed.tif", kCogMediaType, {"data"}, "Speed made good, km/h"},
+      {"speed.qml", kXmlMediaType, {"metadata"}, "QGIS style of speed.tif"},
+      {"gonogo.kmz", kKmzMediaType, {"visual"}, "Go / no-go classes for Google Earth"},
+      {"quicklook.png", kPngMediaType, {"overview"}, title},
+  };
+  return p;
 }
 
 }  // namespace gonogo::geo

@@ -1,5 +1,6 @@
-// PNG quicklook of a go/no-go class map with a legend, and the cairo plumbing the line plots
-// (plot.cc) share with it: owning handles, the font, the atomic PNG write (internal).
+// PNG quicklook of a go/no-go class map (title, legend, north arrow, scale bar), and the cairo
+// plumbing the line plots (plot.cc) share with it: owning handles, the font, the atomic PNG write
+// (internal).
 #pragma once
 
 #include <cairo.h>
@@ -8,6 +9,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "server/geo/terrain.h"
 
 namespace gonogo::geo::internal {
 
@@ -38,20 +41,54 @@ CairoContext NewContext(cairo_surface_t* surface);
 inline constexpr char kFontFamily[] = "DejaVu Sans";
 void SelectFont(cairo_t* cr, double size_px, bool bold = false);
 
-// Size of the map part of the quicklook for a width x height grid: grids with a long side over
-// 1024 cells are shrunk to 1024 px; grids under 256 cells are enlarged by a whole factor so that
-// the legend stays readable beside them.
-void QuicklookMapSize(int width, int height, int* map_width_px, int* map_height_px);
+// Layout of the quicklook in pixels, from the top-left corner of the image:
+//
+//   +--------------------------------------------------+
+//   | title (bold, one line)                           |
+//   | +--------------------------+  legend (4 rows)    |
+//   | | map                      |  north arrow        |
+//   | |                          |  scale bar          |
+//   | +--------------------------+                     |
+//   +--------------------------------------------------+
+//
+// The map keeps the grid's shape: a grid with a long side over kQuicklookMaxMapSidePx cells is
+// shrunk to that many pixels; a smaller one is enlarged by the largest whole factor that keeps it
+// within that size, so even a 10 x 5 grid is drawn about 1000 px wide.
+struct QuicklookLayout {
+  int image_width_px = 0, image_height_px = 0;
+  int map_x_px = 0, map_y_px = 0, map_width_px = 0, map_height_px = 0;
+  int panel_x_px = 0;        // left edge of the legend, north arrow and scale bar column
+  int legend_y_px = 0;       // top of the first legend row
+  int north_arrow_y_px = 0;  // top of the north arrow's box (kQuicklookNorthArrowHeightPx tall)
+  int scale_bar_y_px = 0;    // top of the scale bar's box (kQuicklookScaleBarHeightPx tall)
+};
+inline constexpr int kQuicklookMaxMapSidePx = 1024;
+inline constexpr int kQuicklookMarginPx = 12;
+inline constexpr int kQuicklookTitleBandPx = 40;  // the title line above the map
+inline constexpr int kQuicklookPanelWidthPx = 168;
+inline constexpr int kQuicklookLegendSwatchPx = 16;  // at panel_x, legend_y + row * pitch
+inline constexpr int kQuicklookLegendRowPitchPx = 24;
+inline constexpr int kQuicklookNorthArrowHeightPx = 64;
+inline constexpr int kQuicklookScaleBarHeightPx = 44;
+QuicklookLayout QuicklookLayoutFor(int grid_width, int grid_height);
 
-// Size of the legend panel to the right of the map. The quicklook is (map width +
-// kQuicklookLegendWidthPx) x max(map height, kQuicklookLegendHeightPx) px.
-inline constexpr int kQuicklookLegendWidthPx = 122;
-inline constexpr int kQuicklookLegendHeightPx = 104;
+// Legend rows top to bottom: GO, SLOW-GO, NO-GO, no data. On the quicklook no data is drawn in
+// kQuicklookNoDataColour (an opaque light grey), so the picture reads the same on any background.
+inline constexpr int kQuicklookLegendRows = 4;
+inline constexpr Rgba kQuicklookNoDataColour{224, 224, 224, 255};
 
-// The class map (shrunk by keeping the most restrictive class of each block, so no NO-GO cell
-// vanishes from the overview; enlarged by pixel replication) with a legend panel on its right,
-// as an ARGB32 surface (no data transparent).
-CairoSurface RenderQuicklook(int width, int height, const std::vector<uint8_t>& go_class);
+// The quicklook of a class map on `grid` (layout above), opaque: a white page, the title, the
+// classes (shrunk by keeping the most restrictive class of each block, so no NO-GO cell vanishes;
+// enlarged by pixel replication), the legend, a north arrow (grid north: up) and a scale bar whose
+// length is a round number of metres or kilometres measured along the middle row of the grid.
+CairoSurface RenderQuicklook(const Grid& grid, const std::vector<uint8_t>& go_class,
+                             const std::string& title);
+
+// The legend alone (title above the four rows) on a white panel, for the KMZ's screen overlay.
+CairoSurface RenderLegendPanel(const std::string& title);
+
+// The PNG bytes of an image surface, as cairo encodes them (RGB or RGBA).
+std::string EncodePng(cairo_surface_t* surface);
 
 // Writes `surface` as a PNG file at `path`: RGB for a CAIRO_FORMAT_RGB24 surface (written by
 // cairo), RGBA for CAIRO_FORMAT_ARGB32 (written by GDAL, because cairo's writer drops the alpha

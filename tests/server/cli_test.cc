@@ -38,27 +38,44 @@ ServerProcess* CliTest::server_ = nullptr;
 
 TEST_F(CliTest, MapWritesEveryProductAndShowsProgress) {
   const std::string out = (scratch_->path() / "out").string();
-  const CliRun r = Gonogo(server_->endpoint(),
-                       "map --cone-index " + T("cone_index.tif") + " --elevation " +
-                           T("elevation.tif") + " --soil-class " + T("soil_class.tif") +
-                           " --soil-table " + T("soil_table.json") + " --vehicle " + Vehicle() +
-                           " --tier empirical --out " + out);
+  const CliRun r =
+      Gonogo(server_->endpoint(), "map --cone-index " + T("cone_index.tif") + " --elevation " +
+                                      T("elevation.tif") + " --soil-class " + T("soil_class.tif") +
+                                      " --soil-table " + T("soil_table.json") + " --vehicle " +
+                                      Vehicle() + " --tier empirical --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("100%"), std::string::npos) << "progress reaches 100 %: " << r.out;
   EXPECT_NE(r.out.find("tasks "), std::string::npos) << r.out;
-  for (const char* f : {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"}) {
+  for (const char* f : {"gonogo.tif", "gonogo.tif.aux.xml", "gonogo.qml", "speed.tif", "speed.qml",
+                        "gonogo.kmz", "quicklook.png", "summary.json", "item.json"}) {
     EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;
     EXPECT_GT(fs::file_size(fs::path(out) / f), 0u) << f;
   }
+  // The downloaded folder as a GIS user opens it: QGIS applies the styles and shows the labelled
+  // classes and the km/h ramp, and the STAC item (with the job's provenance) validates.
+  const std::string qgis_check =
+      "/usr/bin/python3 " + SourceDir() + "/tests/server/geo/qgis_products_test.py --products " +
+      out + " --out " + out + "/qgis --stac-schemas " + SourceDir() + "/tests/data/stac 2>&1";
+  FILE* check = popen(qgis_check.c_str(), "r");
+  ASSERT_NE(check, nullptr);
+  std::string check_output;
+  char buffer[4096];
+  for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, check)) > 0;) {
+    check_output.append(buffer, n);
+  }
+  const int check_status = pclose(check);
+  EXPECT_TRUE(WIFEXITED(check_status) && WEXITSTATUS(check_status) == 0) << check_output;
+  const std::string item = ReadFile(fs::path(out) / "item.json");
+  EXPECT_NE(item.find("\"gonogo:provenance\""), std::string::npos) << item;
+  EXPECT_NE(item.find("\"vehicle_hash\""), std::string::npos) << item;
   const CliRun jobs = Gonogo(server_->endpoint(), "jobs");
   EXPECT_EQ(jobs.exit_code, 0);
   EXPECT_NE(jobs.out.find("DONE"), std::string::npos) << jobs.out;
 }
 
 TEST_F(CliTest, CurveCsvHasTheDocumentedColumns) {
-  const CliRun r = Gonogo(server_->endpoint(),
-                       "curve --tier empirical --vehicle " + Vehicle() +
-                           " --cone-index 300 --slip-step 0.1 --csv");
+  const CliRun r = Gonogo(server_->endpoint(), "curve --tier empirical --vehicle " + Vehicle() +
+                                                   " --cone-index 300 --slip-step 0.1 --csv");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   std::istringstream lines(r.out);
   std::string header;
@@ -72,17 +89,17 @@ TEST_F(CliTest, CurveCsvHasTheDocumentedColumns) {
   EXPECT_EQ(rows, 11) << r.out;
 
   const CliRun wheel = Gonogo(server_->endpoint(),
-                           "curve --tier empirical --wheel-diameter 1.011 --wheel-width 0.335 "
-                           "--section-height 0.2178 --deflection 0.0327 --wheel-load 13438 "
-                           "--cone-index 500 --csv");
+                              "curve --tier empirical --wheel-diameter 1.011 --wheel-width 0.335 "
+                              "--section-height 0.2178 --deflection 0.0327 --wheel-load 13438 "
+                              "--cone-index 500 --csv");
   EXPECT_EQ(wheel.exit_code, 0) << wheel.out;
 }
 
 TEST_F(CliTest, ScalabilityWritesThePlotAndTables) {
   const fs::path out = scratch_->path() / "scalability";
-  const CliRun r = Gonogo(server_->endpoint(), "scalability --tier empirical --vehicle " + Vehicle() +
-                                                   " --cone-index 800 --scales 1,0.7,0.5 --out " +
-                                                   out.string());
+  const CliRun r =
+      Gonogo(server_->endpoint(), "scalability --tier empirical --vehicle " + Vehicle() +
+                                      " --cone-index 800 --scales 1,0.7,0.5 --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("2NS 0.7: 100  97.1  100"), std::string::npos) << r.out;
   for (const char* f : {"scalability.png", "scalability_curves.csv", "scalability_summary.csv"}) {
@@ -95,7 +112,8 @@ TEST_F(CliTest, ScalabilityWritesThePlotAndTables) {
 TEST_F(CliTest, TiersListsEveryTierWithWhatItReadsAndCosts) {
   const CliRun r = Gonogo(server_->endpoint(), "tiers");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  for (const char* tier : {"empirical (empirical-1)", "bekker (bekker-1)", "fe-classic (fe-classic-3)"}) {
+  for (const char* tier :
+       {"empirical (empirical-1)", "bekker (bekker-1)", "fe-classic (fe-classic-3)"}) {
     EXPECT_NE(r.out.find(tier), std::string::npos) << tier << "\n" << r.out;
   }
   EXPECT_NE(r.out.find("reads:  cone index"), std::string::npos) << r.out;
@@ -127,28 +145,33 @@ TEST_F(CliTest, SoilsListsModelsWithUnitsAndTheCatalogueWithItsTiers) {
 
 TEST_F(CliTest, SoilParamsReachTheTierAndBadOnesNameTheParameter) {
   // The same soil as --bekker, through the generic form: the same cache key.
-  const std::string wheel = "curve --tier bekker --wheel-diameter 1.011 --wheel-width 0.335 "
-                            "--wheel-load 14513 ";
+  const std::string wheel =
+      "curve --tier bekker --wheel-diameter 1.011 --wheel-width 0.335 "
+      "--wheel-load 14513 ";
   const CliRun short_names =
-      Gonogo(server_->endpoint(), wheel + "--bekker n=0.79,kc=102000,kphi=5301000,c=1300,"
-                                          "phi_deg=31.1,K=0.0115 --csv");
+      Gonogo(server_->endpoint(), wheel +
+                                      "--bekker n=0.79,kc=102000,kphi=5301000,c=1300,"
+                                      "phi_deg=31.1,K=0.0115 --csv");
   ASSERT_EQ(short_names.exit_code, 0) << short_names.out;
-  const CliRun generic = Gonogo(
-      server_->endpoint(),
-      wheel + "--soil-params bekker:n=0.79,kc=102000,kphi=5301000,cohesion_pa=1300,"
-              "friction_angle_deg=31.1,shear_deformation_m=0.0115 --csv");
+  const CliRun generic =
+      Gonogo(server_->endpoint(),
+             wheel +
+                 "--soil-params bekker:n=0.79,kc=102000,kphi=5301000,cohesion_pa=1300,"
+                 "friction_angle_deg=31.1,shear_deformation_m=0.0115 --csv");
   ASSERT_EQ(generic.exit_code, 0) << generic.out;
   EXPECT_EQ(short_names.out.substr(0, short_names.out.find("cache key")),
             generic.out.substr(0, generic.out.find("cache key")));
   EXPECT_NE(generic.out.find("params=bekker{cohesion_pa=1300,"), std::string::npos) << generic.out;
 
-  const CliRun bad = Gonogo(server_->endpoint(),
-                            wheel + "--soil-params bekker:n=0.79,kc=102000,kphi=5301000,"
-                                    "cohesion_pa=1300,friction_angle_deg=95,"
-                                    "shear_deformation_m=0.0115");
+  const CliRun bad =
+      Gonogo(server_->endpoint(), wheel +
+                                      "--soil-params bekker:n=0.79,kc=102000,kphi=5301000,"
+                                      "cohesion_pa=1300,friction_angle_deg=95,"
+                                      "shear_deformation_m=0.0115");
   EXPECT_EQ(bad.exit_code, 3) << bad.out;
-  EXPECT_NE(bad.out.find("INVALID_ARGUMENT: soil.parameters.friction_angle_deg: must lie in (0, 90) deg"),
-            std::string::npos)
+  EXPECT_NE(
+      bad.out.find("INVALID_ARGUMENT: soil.parameters.friction_angle_deg: must lie in (0, 90) deg"),
+      std::string::npos)
       << bad.out;
   EXPECT_EQ(Gonogo(server_->endpoint(), wheel + "--soil-params n=1").exit_code, 2);
 }
@@ -156,9 +179,10 @@ TEST_F(CliTest, SoilParamsReachTheTierAndBadOnesNameTheParameter) {
 TEST_F(CliTest, ACurveThatTakesMinutesRunsAsAJobWithProgress) {
   ScratchDir dir("cli-curve-job");
   ServerProcess server(dir.path(), {"--diagnostic-tiers"});
-  const std::string wheel = "curve --tier diagnostic-slow-curve --wheel-diameter 1.011 "
-                            "--wheel-width 0.335 --section-height 0.2178 --deflection 0.0327 "
-                            "--wheel-load 13438 --cone-index 300 --csv";
+  const std::string wheel =
+      "curve --tier diagnostic-slow-curve --wheel-diameter 1.011 "
+      "--wheel-width 0.335 --section-height 0.2178 --deflection 0.0327 "
+      "--wheel-load 13438 --cone-index 300 --csv";
   const CliRun r = Gonogo(server.endpoint(), wheel);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("curve job job-"), std::string::npos) << r.out;
@@ -172,18 +196,18 @@ TEST_F(CliTest, ACurveThatTakesMinutesRunsAsAJobWithProgress) {
 TEST_F(CliTest, BadVehicleFileAndOptionsAreExplained) {
   const fs::path bad = scratch_->path() / "bad_vehicle.json";
   std::ofstream(bad) << R"({"name": "x", "mass_kg": 1000, "wingspan_m": 3})";
-  CliRun r = Gonogo(server_->endpoint(), "curve --tier empirical --vehicle " + bad.string() +
-                                          " --cone-index 300");
+  CliRun r = Gonogo(server_->endpoint(),
+                    "curve --tier empirical --vehicle " + bad.string() + " --cone-index 300");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("wingspan_m"), std::string::npos) << r.out;
 
-  r = Gonogo(server_->endpoint(), "curve --tier nonsense --vehicle " + Vehicle() +
-                                      " --cone-index 300");
+  r = Gonogo(server_->endpoint(),
+             "curve --tier nonsense --vehicle " + Vehicle() + " --cone-index 300");
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.out.find("INVALID_ARGUMENT: tier:"), std::string::npos) << r.out;
 
-  r = Gonogo(server_->endpoint(), "curve --tier empirical --vehicle " + Vehicle() +
-                                      " --cone-index soft");
+  r = Gonogo(server_->endpoint(),
+             "curve --tier empirical --vehicle " + Vehicle() + " --cone-index soft");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("--cone-index"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("soft"), std::string::npos) << "names the value: " << r.out;

@@ -141,7 +141,8 @@ TEST_F(ServiceTest, SampleMapProducesGeoreferencedProductsAndASecondRunComputesN
   // Products: CRS and geotransform of the cone-index input, palette, nodata, legend.
   auto stub = server_->Stub();
   auto files = DownloadAll(*stub, first_id);
-  for (const char* name : {"gonogo.tif", "speed.tif", "quicklook.png", "summary.json"}) {
+  for (const char* name : {"gonogo.tif", "gonogo.tif.aux.xml", "gonogo.qml", "speed.tif",
+                           "speed.qml", "gonogo.kmz", "quicklook.png", "summary.json", "item.json"}) {
     EXPECT_GT(files[name].size(), 0u) << name;
   }
   GDALAllRegister();
@@ -316,7 +317,9 @@ TEST_F(ServiceTest, BadInputIsRejectedWithTheFieldAndHarmsNothing) {
   EXPECT_EQ(CurveCount(), curves_before);
   EXPECT_EQ(job_count(), jobs_before) << "a rejected request leaves no job";
   EXPECT_EQ(job_dirs(), dirs_before) << "a rejected request leaves no files";
-  EXPECT_EQ(DownloadAll(*stub, good_id).size(), 4u);
+  EXPECT_EQ(DownloadAll(*stub, good_id).size(), 9u)
+      << "gonogo.tif, its .aux.xml, gonogo.qml, speed.tif, speed.qml, gonogo.kmz, quicklook.png, "
+         "summary.json, item.json";
 }
 
 TEST_F(ServiceTest, SizeLimitGivesResourceExhausted) {

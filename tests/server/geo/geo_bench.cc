@@ -88,11 +88,11 @@ int main(int argc, char** argv) {
     }
     start = Clock::now();
     const gonogo::geo::MapProducts products = gonogo::geo::WriteMapProducts(
-        layers.grid, go_class, speed_kmh, {{"BENCH", "1"}}, dir.path());
+        layers.grid, go_class, speed_kmh, {"bench", {{"BENCH", "1"}}}, dir.path());
     const double write_s = SecondsSince(start);
     double bytes = 0;
-    for (const std::string& path :
-         {products.gonogo_tif, products.speed_tif, products.quicklook_png}) {
+    for (const gonogo::geo::ProductFile& file : products.files) {
+      const std::string path = dir.path() + "/" + file.name;
       if (FILE* f = std::fopen(path.c_str(), "rb")) {
         std::fseek(f, 0, SEEK_END);
         bytes += std::ftell(f);

@@ -1,11 +1,15 @@
 // WriteMapProducts: the COGs carry the grid's CRS and geotransform exactly, their nodata, palette,
-// legend and units, and pass GDAL's COG validator; the quicklook has the documented size and
-// legend, its labels set in an antialiased font.
+// legend and units, and pass GDAL's COG validator; the class names reach GDAL through the sidecar;
+// the QGIS styles name the classes and the speed ramp; GDAL reads the KMZ back in WGS 84 with the
+// class colours and finds its legend overlay; the STAC item has the WGS 84 bbox and the native
+// grid; the quicklook has the documented layout, legend text, north arrow and scale bar.
+// (qgis_products_test.py opens the same products in QGIS and validates the STAC item's schema.)
 //
 // To look at a quicklook: GONOGO_QUICKLOOK_SAMPLE=/tmp/quicklook.png
 // build/tests/server/geo/geo_products_test --gtest_filter='*Quicklook*'
 #include "server/geo/products.h"
 
+#include <gdal_rat.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 
@@ -14,8 +18,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 
+#include "server/geo/qgis_style.h"
 #include "solvers/common/errors.h"
 #include "tests/server/geo/test_rasters.h"
 
@@ -80,10 +88,15 @@ TEST(WriteMapProducts, ClassCogHasPaletteLegendAndGrid) {
   std::vector<float> speed;
   FillPattern(grid, &go_class, &speed);
   const MapProducts p =
-      WriteMapProducts(grid, go_class, speed, {{"RUN_ID", "run-42"}}, dir.path() + "/out");
+      WriteMapProducts(grid, go_class, speed, {"", {{"RUN_ID", "run-42"}}}, dir.path() + "/out");
   EXPECT_EQ(p.gonogo_tif, dir.path() + "/out/gonogo.tif");
-  EXPECT_EQ(FilesIn(dir.path() + "/out"),
-            (std::set<std::string>{"gonogo.tif", "speed.tif", "quicklook.png"}));
+  const std::set<std::string> expected_files = {"gonogo.tif",   "gonogo.tif.aux.xml", "gonogo.qml",
+                                                "speed.tif",    "speed.qml",          "gonogo.kmz",
+                                                "quicklook.png"};
+  EXPECT_EQ(FilesIn(dir.path() + "/out"), expected_files);
+  std::set<std::string> listed;
+  for (const ProductFile& file : p.files) listed.insert(file.name);
+  EXPECT_EQ(listed, expected_files);
 
   auto ds = OpenForCheck(p.gonogo_tif);
   ASSERT_NE(ds, nullptr);
@@ -137,7 +150,8 @@ TEST(WriteMapProducts, SpeedCogIsFloatKmhWithNanNodata) {
   std::vector<uint8_t> go_class;
   std::vector<float> speed;
   FillPattern(grid, &go_class, &speed);
-  const MapProducts p = WriteMapProducts(grid, go_class, speed, {{"VEHICLE", "truck"}}, dir.path());
+  const MapProducts p =
+      WriteMapProducts(grid, go_class, speed, {"", {{"VEHICLE", "truck"}}}, dir.path());
 
   auto ds = OpenForCheck(p.speed_tif);
   ASSERT_NE(ds, nullptr);
@@ -194,10 +208,10 @@ TEST(WriteMapProducts, GeographicGridKeepsItsCrs) {
   }
 }
 
-// Pixel (x, y) of an RGBA PNG.
+// Pixel (x, y) of an RGBA PNG (of an RGB one: alpha 255).
 std::array<int, 4> PixelAt(GDALDataset& png, int x, int y) {
-  std::array<int, 4> rgba{};
-  for (int b = 0; b < 4; ++b) {
+  std::array<int, 4> rgba{0, 0, 0, 255};
+  for (int b = 0; b < std::min(4, png.GetRasterCount()); ++b) {
     uint8_t v = 0;
     EXPECT_EQ(
         png.GetRasterBand(b + 1)->RasterIO(GF_Read, x, y, 1, 1, &v, 1, 1, GDT_Byte, 0, 0, nullptr),
@@ -207,66 +221,137 @@ std::array<int, 4> PixelAt(GDALDataset& png, int x, int y) {
   return rgba;
 }
 
-TEST(WriteMapProducts, QuicklookHasDocumentedSizeColoursAndLegend) {
-  // Legend panel (quicklook.cc): 122 px wide, 8 + 4 * 24 = 104 px tall; rows of a 16 px swatch at
-  // x 8 and a label from x 32, the first at y 8.
+// Counts of text-like pixels in a box: opaque greys darker than 96 (ink) and between 96 and 224
+// (antialiased edges), and the rows the ink spans.
+struct Ink {
+  int dark = 0, edge = 0, rows = 0;
+};
+Ink InkIn(GDALDataset& png, int x0, int y0, int w, int h) {
+  Ink ink;
+  int top = 1 << 30, bottom = -1;
+  for (int y = y0; y < y0 + h; ++y) {
+    for (int x = x0; x < x0 + w; ++x) {
+      const auto v = PixelAt(png, x, y);
+      if (v[3] != 255 || v[0] != v[1] || v[1] != v[2]) continue;
+      if (v[0] < 96) {
+        ++ink.dark;
+        top = std::min(top, y);
+        bottom = std::max(bottom, y);
+      } else if (v[0] < 224) {
+        ++ink.edge;
+      }
+    }
+  }
+  ink.rows = bottom >= top ? bottom - top + 1 : 0;
+  return ink;
+}
+
+TEST(WriteMapProducts, QuicklookHasDocumentedLayoutColoursLegendNorthArrowAndScaleBar) {
+  // Layout (quicklook.h): 12 px margins, a 40 px title band, the map, a 168 px panel column with
+  // the legend (24 px rows), a 64 px north arrow box and a 44 px scale bar box below it.
   struct Case {
-    int width, height, png_width, png_height;
+    int width, height, map_width, map_height, png_width, png_height;
   };
-  for (const Case& c : {Case{300, 200, 300 + 122, 200},     // as is
-                        Case{10, 5, 250 + 122, 125},        // enlarged x25
-                        Case{2048, 1024, 1024 + 122, 512},  // shrunk to 1024 px
-                        Case{600, 20, 600 + 122, 104}}) {   // legend taller than the map
+  const int panel_bottom = 40 + 4 * 24 + 12 + 64 + 44;                                 // 256
+  for (const Case& c : {Case{300, 200, 900, 600, 12 + 900 + 12 + 168, 40 + 600 + 12},  // x3
+                        Case{10, 5, 1020, 510, 12 + 1020 + 12 + 168, 40 + 510 + 12},   // x102
+                        Case{2048, 1024, 1024, 512, 1216, 40 + 512 + 12},   // shrunk to 1024 px
+                        Case{600, 20, 600, 20, 792, panel_bottom + 12}}) {  // panel taller
     TempDir dir("geo_quicklook");
     const Grid grid = UtmGrid(c.width, c.height);
     std::vector<uint8_t> go_class;
     std::vector<float> speed;
     FillPattern(grid, &go_class, &speed);
-    const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+    const MapProducts p = WriteMapProducts(
+        grid, go_class, speed, {"Test map - FED Alpha, empirical tier", {}}, dir.path());
     const char* keep = std::getenv("GONOGO_QUICKLOOK_SAMPLE");
     if (keep != nullptr && c.width == 300) {
       std::filesystem::copy_file(p.quicklook_png, keep,
                                  std::filesystem::copy_options::overwrite_existing);
     }
+    const std::string name = std::to_string(c.width) + "x" + std::to_string(c.height);
     auto png = OpenForCheck(p.quicklook_png);
     ASSERT_NE(png, nullptr);
     EXPECT_STREQ(png->GetDriver()->GetDescription(), "PNG");
-    EXPECT_EQ(png->GetRasterXSize(), c.png_width) << c.width << "x" << c.height;
-    EXPECT_EQ(png->GetRasterYSize(), c.png_height) << c.width << "x" << c.height;
+    EXPECT_EQ(png->GetRasterXSize(), c.png_width) << name;
+    EXPECT_EQ(png->GetRasterYSize(), c.png_height) << name;
     ASSERT_EQ(png->GetRasterCount(), 4);
-    const int map_w = c.png_width - 122;
-    // Left quarter NO-GO (red), right quarter no data (transparent).
-    const auto red = PixelAt(*png, 0, 0);
-    EXPECT_GT(red[0], 200);
-    EXPECT_LT(red[1], 60);
-    EXPECT_EQ(red[3], 255);
-    EXPECT_EQ(PixelAt(*png, map_w - 1, 0)[3], 0);
-    // Swatches in the class colours: GO green, SLOW-GO amber, NO-GO red.
-    EXPECT_EQ(PixelAt(*png, map_w + 16, 16), (std::array<int, 4>{26, 150, 65, 255}));
-    EXPECT_EQ(PixelAt(*png, map_w + 16, 16 + 24), (std::array<int, 4>{255, 176, 0, 255}));
-    EXPECT_EQ(PixelAt(*png, map_w + 16, 16 + 48), (std::array<int, 4>{215, 25, 28, 255}));
-    // Each label is text: dark ink (grey, opaque) right of its swatch, with antialiased grey edges
-    // that a bitmap font would not have, spread over at least 9 rows (14 px type).
+    // Map at (12, 40): left quarter NO-GO red, right quarter no data in opaque light grey; white
+    // page around it.
+    EXPECT_EQ(PixelAt(*png, 12, 40), (std::array<int, 4>{215, 25, 28, 255})) << name;
+    EXPECT_EQ(PixelAt(*png, 12 + c.map_width - 1, 40 + c.map_height - 1),
+              (std::array<int, 4>{224, 224, 224, 255}))
+        << name;
+    EXPECT_EQ(PixelAt(*png, 5, 40), (std::array<int, 4>{255, 255, 255, 255})) << name;
+    // Swatches in the class colours: GO green, SLOW-GO amber, NO-GO red, no data grey.
+    const int panel_x = 12 + c.map_width + 12;
+    EXPECT_EQ(PixelAt(*png, panel_x + 8, 40 + 8), (std::array<int, 4>{26, 150, 65, 255})) << name;
+    EXPECT_EQ(PixelAt(*png, panel_x + 8, 40 + 8 + 24), (std::array<int, 4>{255, 176, 0, 255}));
+    EXPECT_EQ(PixelAt(*png, panel_x + 8, 40 + 8 + 48), (std::array<int, 4>{215, 25, 28, 255}));
+    EXPECT_EQ(PixelAt(*png, panel_x + 8, 40 + 8 + 72), (std::array<int, 4>{224, 224, 224, 255}));
+    // Each label is text: dark ink right of its swatch with antialiased grey edges that a bitmap
+    // font would not have, over at least 9 rows (14 px type).
     for (int row = 0; row < 4; ++row) {
-      int dark = 0, edge = 0, top = 1 << 30, bottom = -1;
-      for (int y = 8 + 24 * row - 2; y < 8 + 24 * row + 18; ++y) {
-        for (int x = map_w + 30; x < map_w + 122; ++x) {
-          const auto v = PixelAt(*png, x, y);
-          if (v[3] != 255 || v[0] != v[1] || v[1] != v[2]) continue;
-          if (v[0] < 96) {
-            ++dark;
-            top = std::min(top, y);
-            bottom = std::max(bottom, y);
-          } else if (v[0] < 224) {
-            ++edge;
-          }
-        }
-      }
-      EXPECT_GT(dark, 20) << "legend row " << row;
-      EXPECT_GT(edge, 5) << "legend row " << row;
-      EXPECT_GE(bottom - top + 1, 9) << "legend row " << row;
+      const Ink label = InkIn(*png, panel_x + 22, 40 + 24 * row - 2, 140, 20);
+      EXPECT_GT(label.dark, 20) << name << " legend row " << row;
+      EXPECT_GT(label.edge, 5) << name << " legend row " << row;
+      EXPECT_GE(label.rows, 9) << name << " legend row " << row;
     }
+    // Title: a line of bold text in the band above the map, capitals 12-14 px tall.
+    const Ink title = InkIn(*png, 0, 0, c.png_width, 40);
+    EXPECT_GT(title.dark, 300) << name;
+    EXPECT_GE(title.rows, 11) << name;
+    EXPECT_LE(title.rows, 20) << name;
+    // North arrow: a solid black left half under its tip, in the column's top-left.
+    const int arrow_y = 40 + 4 * 24 + 12;
+    EXPECT_EQ(PixelAt(*png, panel_x + 9, arrow_y + 28), (std::array<int, 4>{0, 0, 0, 255})) << name;
+    EXPECT_GT(InkIn(*png, panel_x, arrow_y, 40, 64).dark, 200) << name;
   }
+}
+
+TEST(WriteMapProducts, QuicklookScaleBarHasARoundLengthInGroundMetres) {
+  // 300 x 200 cells of 10 m drawn x3: 3.33 m per pixel; at most 144 px = 480 m, so the bar is
+  // 200 m = 60 px long, from the panel's left edge, 8 px below the top of its box.
+  TempDir dir("geo_quicklook");
+  const Grid grid = UtmGrid(300, 200);
+  std::vector<uint8_t> go_class;
+  std::vector<float> speed;
+  FillPattern(grid, &go_class, &speed);
+  const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+  auto png = OpenForCheck(p.quicklook_png);
+  ASSERT_NE(png, nullptr);
+  // Layout: panel column at x = 12 + 900 + 12, scale bar box at y = 40 + 4 * 24 + 12 + 64.
+  const int panel_x = 12 + 900 + 12;
+  const int bar_y = 40 + 4 * 24 + 12 + 64 + 8;
+  const std::array<int, 4> black{0, 0, 0, 255}, white{255, 255, 255, 255};
+  EXPECT_EQ(PixelAt(*png, panel_x, bar_y), black);       // left end
+  EXPECT_EQ(PixelAt(*png, panel_x + 59, bar_y), black);  // right end
+  EXPECT_EQ(PixelAt(*png, panel_x + 60, bar_y), white);  // just past it
+  // Alternate segments: the second quarter is white inside its outline, the first black.
+  EXPECT_EQ(PixelAt(*png, panel_x + 7, bar_y + 4), black);
+  EXPECT_EQ(PixelAt(*png, panel_x + 22, bar_y + 4), white);
+  // Labels "0" and "200 m" under the bar's ends.
+  EXPECT_GT(InkIn(*png, panel_x, bar_y + 10, 10, 20).dark, 5);
+  EXPECT_GT(InkIn(*png, panel_x + 20, bar_y + 10, 42, 20).dark, 30);
+
+  // A geographic grid: 0.001 degree cells at 36 N are 90.2 m wide; 200 cells x5 = 18 m per px;
+  // 144 px = 2.6 km, so the bar is 2 km = 111 px.
+  Grid geographic;
+  geographic.width = 200;
+  geographic.height = 100;
+  geographic.geotransform = {-81.1, 0.001, 0.0, 36.05, 0.0, -0.001};
+  geographic.crs_wkt = fixtures::WktOfEpsg(4326);
+  FillPattern(geographic, &go_class, &speed);
+  const MapProducts q = WriteMapProducts(geographic, go_class, speed, {}, dir.path() + "/geo");
+  auto geo_png = OpenForCheck(q.quicklook_png);
+  ASSERT_EQ(geo_png->GetRasterXSize(), 12 + 1000 + 12 + 168);
+  const int geo_panel_x = 12 + 1000 + 12;
+  const double metres_per_px =
+      0.001 * M_PI / 180.0 * 6378137.0 * std::cos(36.0 * M_PI / 180.0) * 200 / 1000.0;
+  const int expected_px = static_cast<int>(2000.0 / metres_per_px + 0.5);
+  EXPECT_NEAR(expected_px, 111, 1);
+  EXPECT_EQ(PixelAt(*geo_png, geo_panel_x + expected_px - 2, bar_y), black);
+  EXPECT_EQ(PixelAt(*geo_png, geo_panel_x + expected_px + 2, bar_y), white);
 }
 
 TEST(WriteMapProducts, ShrunkQuicklookKeepsIsolatedNoGoCell) {
@@ -278,12 +363,224 @@ TEST(WriteMapProducts, ShrunkQuicklookKeepsIsolatedNoGoCell) {
   const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
   auto png = OpenForCheck(p.quicklook_png);
   ASSERT_NE(png, nullptr);
-  EXPECT_EQ(png->GetRasterXSize(), 1024 + 122);
+  EXPECT_EQ(png->GetRasterXSize(), 12 + 1024 + 12 + 168);
   // Cell (row 1025, col 1026) lands in map pixel x = 1026 * 1024 / 2050, y = 1025 * 1024 / 2050,
-  // both 512 after truncation; a nearest-neighbour shrink would drop it.
-  const auto pixel = PixelAt(*png, 512, 512);
+  // both 512 after truncation, drawn at (12 + 512, 40 + 512); a nearest-neighbour shrink would
+  // drop it.
+  const auto pixel = PixelAt(*png, 12 + 512, 40 + 512);
   EXPECT_GT(pixel[0], 200);
   EXPECT_LT(pixel[1], 60);
+}
+
+TEST(WriteMapProducts, ClassNamesLiveInTheSidecarThatShipsWithTheCog) {
+  TempDir dir("geo_products");
+  const Grid grid = UtmGrid(40, 30);
+  std::vector<uint8_t> go_class;
+  std::vector<float> speed;
+  FillPattern(grid, &go_class, &speed);
+  const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+  EXPECT_EQ(p.gonogo_aux_xml, p.gonogo_tif + ".aux.xml");
+  {
+    auto ds = OpenForCheck(p.gonogo_tif);
+    ASSERT_NE(ds, nullptr);
+    GDALRasterBand* band = ds->GetRasterBand(1);
+    const GDALRasterAttributeTable* table = band->GetDefaultRAT();
+    ASSERT_NE(table, nullptr);
+    ASSERT_EQ(table->GetRowCount(), 3);
+    const int name_column = table->GetColOfUsage(GFU_Name);
+    const int value_column = table->GetColOfUsage(GFU_MinMax);
+    const int red_column = table->GetColOfUsage(GFU_Red);
+    ASSERT_GE(name_column, 0);
+    ASSERT_GE(value_column, 0);
+    ASSERT_GE(red_column, 0);
+    const char* names[] = {"NO-GO", "SLOW-GO", "GO"};
+    for (int row = 0; row < 3; ++row) {
+      EXPECT_EQ(table->GetValueAsInt(row, value_column), row);
+      EXPECT_STREQ(table->GetValueAsString(row, name_column), names[row]);
+      EXPECT_EQ(table->GetValueAsInt(row, red_column),
+                band->GetColorTable()->GetColorEntry(row)->c1);
+    }
+    char** categories = band->GetCategoryNames();
+    ASSERT_NE(categories, nullptr);
+    ASSERT_EQ(CSLCount(categories), 3);
+    EXPECT_STREQ(categories[0], "NO-GO");
+    EXPECT_STREQ(categories[1], "SLOW-GO");
+    EXPECT_STREQ(categories[2], "GO");
+  }
+  // The TIFF itself cannot hold them: copied alone, the COG has neither.
+  const std::string alone = dir.path() + "/alone.tif";
+  std::filesystem::copy_file(p.gonogo_tif, alone);
+  auto ds = OpenForCheck(alone);
+  ASSERT_NE(ds, nullptr);
+  EXPECT_EQ(ds->GetRasterBand(1)->GetDefaultRAT(), nullptr);
+  EXPECT_EQ(ds->GetRasterBand(1)->GetCategoryNames(), nullptr);
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(WriteMapProducts, QgisStylesNameTheClassesAndTheSpeedRamp) {
+  TempDir dir("geo_products");
+  const Grid grid = UtmGrid(40, 30);
+  std::vector<uint8_t> go_class;
+  std::vector<float> speed;
+  FillPattern(grid, &go_class, &speed);  // speeds up to 20.29 km/h: ramp to 25 km/h
+  const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+  const std::string classes = ReadText(p.gonogo_qml);
+  EXPECT_NE(classes.find(R"(type="paletted")"), std::string::npos);
+  for (const char* entry : {R"(value="2" color="#1a9641" alpha="255" label="GO")",
+                            R"(value="1" color="#ffb000" alpha="255" label="SLOW-GO")",
+                            R"(value="0" color="#d7191c" alpha="255" label="NO-GO")"}) {
+    EXPECT_NE(classes.find(entry), std::string::npos) << entry;
+  }
+  const std::string speeds = ReadText(p.speed_qml);
+  EXPECT_NE(speeds.find(R"(type="singlebandpseudocolor")"), std::string::npos);
+  EXPECT_NE(speeds.find(R"(maximumValue="25")"), std::string::npos);
+  EXPECT_NE(speeds.find(R"(label="0 km/h")"), std::string::npos);
+  EXPECT_NE(speeds.find(R"(label="12.5 km/h")"), std::string::npos);
+  EXPECT_NE(speeds.find(R"(label="25 km/h")"), std::string::npos);
+
+  EXPECT_EQ(internal::SpeedRampMaxKmh(0.0), 5.0);
+  EXPECT_EQ(internal::SpeedRampMaxKmh(std::nan("")), 5.0);
+  EXPECT_EQ(internal::SpeedRampMaxKmh(5.0), 5.0);
+  EXPECT_EQ(internal::SpeedRampMaxKmh(5.01), 10.0);
+  EXPECT_EQ(internal::SpeedRampMaxKmh(38.2), 40.0);
+}
+
+TEST(WriteMapProducts, GdalReadsTheKmzBackInWgs84WithClassColoursAndALegendOverlay) {
+  TempDir dir("geo_products");
+  const Grid grid = UtmGrid(300, 200);  // 3 km x 2 km at 36.1 N 81 W
+  std::vector<uint8_t> go_class;
+  std::vector<float> speed;
+  FillPattern(grid, &go_class, &speed);
+  const MapProducts p =
+      WriteMapProducts(grid, go_class, speed, {"Ridge & valley - FED Alpha", {}}, dir.path());
+  EXPECT_EQ(p.kmz, dir.path() + "/gonogo.kmz");
+  auto kmz = OpenForCheck(p.kmz);
+  ASSERT_NE(kmz, nullptr);
+  EXPECT_STREQ(kmz->GetDriver()->GetDescription(), "KMLSUPEROVERLAY");
+  ASSERT_EQ(kmz->GetRasterCount(), 4);
+  std::array<double, 6> gt{};
+  ASSERT_EQ(kmz->GetGeoTransform(gt.data()), CE_None);
+  // Its extent is the grid's, in degrees (corners transformed with PROJ, a 10 m cell is about
+  // 0.0001 degree).
+  const auto north_west = fixtures::Transform(32617, 4326, 500000.0, 4000000.0);
+  const auto south_east = fixtures::Transform(32617, 4326, 503000.0, 3998000.0);
+  EXPECT_NEAR(gt[0], north_west[0], 2e-4);
+  EXPECT_NEAR(gt[3], north_west[1], 2e-4);
+  EXPECT_NEAR(gt[0] + gt[1] * kmz->GetRasterXSize(), south_east[0], 2e-4);
+  EXPECT_NEAR(gt[3] + gt[5] * kmz->GetRasterYSize(), south_east[1], 2e-4);
+  // Colours, read through GDAL's KML reader: the left quarter NO-GO red, the right no data clear.
+  std::array<uint8_t, 4> left{}, right{};
+  const int middle_row = kmz->GetRasterYSize() / 2;
+  for (int b = 0; b < 4; ++b) {
+    ASSERT_EQ(kmz->GetRasterBand(b + 1)->RasterIO(GF_Read, 5, middle_row, 1, 1, &left[b], 1, 1,
+                                                  GDT_Byte, 0, 0, nullptr),
+              CE_None);
+    ASSERT_EQ(kmz->GetRasterBand(b + 1)->RasterIO(GF_Read, kmz->GetRasterXSize() - 5, middle_row, 1,
+                                                  1, &right[b], 1, 1, GDT_Byte, 0, 0, nullptr),
+              CE_None);
+  }
+  EXPECT_EQ(left, (std::array<uint8_t, 4>{215, 25, 28, 255}));
+  EXPECT_EQ(right[3], 0);
+  kmz.reset();
+
+  // doc.kml pins legend.png to the view; the legend is a PNG with the title and the rows.
+  const std::string zip = "/vsizip/" + p.kmz;
+  VSILFILE* doc = VSIFOpenL((zip + "/doc.kml").c_str(), "rb");
+  ASSERT_NE(doc, nullptr);
+  std::string kml(1 << 16, '\0');
+  kml.resize(VSIFReadL(kml.data(), 1, kml.size(), doc));
+  VSIFCloseL(doc);
+  EXPECT_NE(kml.find("<ScreenOverlay>"), std::string::npos) << kml;
+  EXPECT_NE(kml.find("<href>legend.png</href>"), std::string::npos) << kml;
+  EXPECT_NE(kml.find("Ridge &amp; valley - FED Alpha"), std::string::npos) << kml;
+  auto legend = OpenForCheck(zip + "/legend.png");
+  ASSERT_NE(legend, nullptr);
+  EXPECT_EQ(legend->GetRasterXSize(), 220);
+  EXPECT_EQ(legend->GetRasterYSize(), 34 + 4 * 24 + 6);
+  EXPECT_GT(InkIn(*legend, 0, 0, 220, 34).dark, 200);  // the title
+}
+
+nlohmann::json ReadJson(const std::string& path) { return nlohmann::json::parse(ReadText(path)); }
+
+TEST(WriteStacItem, DescribesTheAssetsWithWgs84BboxAndTheNativeGrid) {
+  TempDir dir("geo_stac");
+  const Grid grid = UtmGrid(300, 200);
+  std::vector<uint8_t> go_class;
+  std::vector<float> speed;
+  FillPattern(grid, &go_class, &speed);
+  const MapProducts p = WriteMapProducts(grid, go_class, speed, {}, dir.path());
+  const std::string path = dir.path() + "/item.json";
+  WriteStacItem(grid,
+                {"job-7", "2024-05-01T12:00:00Z", "Test map", R"({"gonogo:tier": "empirical"})"},
+                p.files, path);
+  const nlohmann::json item = ReadJson(path);
+  EXPECT_EQ(item["type"], "Feature");
+  EXPECT_EQ(item["stac_version"], "1.0.0");
+  EXPECT_EQ(item["id"], "job-7");
+  EXPECT_EQ(item["properties"]["datetime"], "2024-05-01T12:00:00Z");
+  EXPECT_EQ(item["properties"]["title"], "Test map");
+  EXPECT_EQ(item["properties"]["gonogo:tier"], "empirical");
+  EXPECT_EQ(item["properties"]["proj:epsg"], 32617);
+  EXPECT_EQ(item["properties"]["proj:shape"], (nlohmann::json{200, 300}));
+  EXPECT_EQ(item["properties"]["proj:transform"],
+            (nlohmann::json{10.0, 0.0, 500000.0, 0.0, -10.0, 4000000.0}));
+  EXPECT_EQ(item["properties"]["proj:bbox"],
+            (nlohmann::json{500000.0, 3998000.0, 503000.0, 4000000.0}));
+  // bbox: west, south, east, north of the grid's corners in WGS 84 (UTM edges curve only a little
+  // over 3 km: the densified bbox is within 1e-6 degree of the corners).
+  const auto sw = fixtures::Transform(32617, 4326, 500000.0, 3998000.0);
+  const auto se = fixtures::Transform(32617, 4326, 503000.0, 3998000.0);
+  const auto nw = fixtures::Transform(32617, 4326, 500000.0, 4000000.0);
+  const auto ne = fixtures::Transform(32617, 4326, 503000.0, 4000000.0);
+  const auto& bbox = item["bbox"];
+  ASSERT_EQ(bbox.size(), 4u);
+  EXPECT_NEAR(bbox[0].get<double>(), std::min(sw[0], nw[0]), 1e-6);
+  EXPECT_NEAR(bbox[1].get<double>(), std::min(sw[1], se[1]), 1e-6);
+  EXPECT_NEAR(bbox[2].get<double>(), std::max(se[0], ne[0]), 1e-6);
+  EXPECT_NEAR(bbox[3].get<double>(), std::max(nw[1], ne[1]), 1e-6);
+  // The footprint: a closed ring through the corners, every point inside the bbox.
+  const auto& ring = item["geometry"]["coordinates"][0];
+  EXPECT_EQ(item["geometry"]["type"], "Polygon");
+  EXPECT_EQ(ring.front(), ring.back());
+  EXPECT_NEAR(ring[0][0].get<double>(), sw[0], 1e-9);
+  EXPECT_NEAR(ring[0][1].get<double>(), sw[1], 1e-9);
+  for (const auto& point : ring) {
+    EXPECT_GE(point[0].get<double>(), bbox[0].get<double>() - 1e-9);
+    EXPECT_LE(point[1].get<double>(), bbox[3].get<double>() + 1e-9);
+  }
+  // Every product is an asset with its media type and roles.
+  ASSERT_EQ(item["assets"].size(), p.files.size());
+  EXPECT_EQ(item["assets"]["gonogo.tif"]["href"], "./gonogo.tif");
+  EXPECT_EQ(item["assets"]["gonogo.tif"]["type"],
+            "image/tiff; application=geotiff; profile=cloud-optimized");
+  EXPECT_EQ(item["assets"]["gonogo.tif"]["roles"], (nlohmann::json{"data"}));
+  EXPECT_EQ(item["assets"]["gonogo.kmz"]["type"], "application/vnd.google-earth.kmz");
+  EXPECT_EQ(item["assets"]["quicklook.png"]["roles"], (nlohmann::json{"overview"}));
+}
+
+TEST(WriteStacItem, RejectsAnItemWithoutIdOrTimeOrWithPropertiesThatAreNotAnObject) {
+  TempDir dir("geo_stac");
+  const Grid grid = UtmGrid(10, 10);
+  auto field_of = [&](const StacItemInfo& info) -> std::string {
+    try {
+      WriteStacItem(grid, info, {}, dir.path() + "/item.json");
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(field_of({"", "2024-05-01T12:00:00Z", "", ""}), "stac");
+  EXPECT_EQ(field_of({"job", "", "", ""}), "stac");
+  EXPECT_EQ(field_of({"job", "2024-05-01T12:00:00Z", "", "[1, 2]"}), "stac");
+  EXPECT_EQ(field_of({"job", "2024-05-01T12:00:00Z", "", "{not json"}), "stac");
+  EXPECT_TRUE(FilesIn(dir.path()).empty());
+  EXPECT_EQ(field_of({"job", "2024-05-01T12:00:00Z", "", ""}), "(no error)");
 }
 
 TEST(WriteMapProducts, RejectsInconsistentArguments) {
@@ -294,7 +591,7 @@ TEST(WriteMapProducts, RejectsInconsistentArguments) {
   auto field_of = [&](const Grid& g, const std::vector<uint8_t>& c, const std::vector<float>& s,
                       const std::map<std::string, std::string>& m) -> std::string {
     try {
-      WriteMapProducts(g, c, s, m, dir.path());
+      WriteMapProducts(g, c, s, {"", m}, dir.path());
     } catch (const InputError& e) {
       return e.field();
     }
