@@ -223,8 +223,8 @@ void RegisterBuiltinSoilModels(SoilModelRegistry& registry) {
       Param("rolling_limit", "-", 0, 10, "rolling friction eta", 0.99),
       Param("particle_radius_m", "m", 0, 1, "mean grain radius", 0.87e-3, true),
       Param("density_kg_m3", "kg/m^3", 100, 20000, "grain density rho", 2650.0),
-      // At least 100: the periodic cell must be 3 neighbour bins (2 r_max + skin) thick on every
-      // axis, which 60-72 grains at the default packing are not.
+      // At least 100: a smaller cell is under 4 grain diameters across, too few grains for a
+      // homogenised response (and soon thinner than 2 r_max + skin when compressed).
       Param("grains_per_rve", "-", 100, 100000, "grains in one RVE", 500.0),
       Param("consolidation_pressure_pa", "Pa", 0, kInf, "isotropic confining stress of the RVE",
             100e3, true),

@@ -7,6 +7,15 @@
 #include "solvers/common/errors.h"
 
 namespace gonogo::dem {
+namespace {
+
+// A bin to search from a grain's home bin along one axis, and the image of its grains there.
+struct BinReach {
+  int index = 0;
+  int wrap = 0;
+};
+
+}  // namespace
 
 void Box::Validate() const {
   Require(lo_m.allFinite() && hi_m.allFinite(), "box", "corners must be finite");
@@ -41,9 +50,11 @@ void NeighborList::BinParticles(const Particles& particles, const Cell& cell, do
     // so the 27 surrounding bins hold every grain within the cutoff, however the cell is sheared.
     cell_count_[d] = std::max(1, static_cast<int>(std::floor(spacing[d] / cell_size_m)));
     if (cell.periodic[d]) {
-      Require(cell_count_[d] >= 3, "box",
-              "a periodic cell must be at least 3 (2 r_max + skin) thick on every axis for the "
-              "minimum image");
+      // One bin thick at least: then a grain within reach of another is within reach of one of
+      // its images j + w e_d, w in {-1, 0, 1} (|delta s_d| = |n_d . r| / spacing_d < 1).
+      Require(spacing[d] >= cell_size_m, "box",
+              "a periodic cell must be at least 2 r_max + skin thick on every axis (it was "
+              "compressed or stretched too far for its grain count)");
     }
     cells *= cell_count_[d];
   }
@@ -85,33 +96,43 @@ void NeighborList::Build(const Particles& particles, const Cell& cell, double sk
     const int bin = cell_of_particle_[i];
     const int home[3] = {bin % cell_count_[0], (bin / cell_count_[0]) % cell_count_[1],
                          bin / (cell_count_[0] * cell_count_[1])};
-    for (int dz = -1; dz <= 1; ++dz) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int offset[3] = {dx, dy, dz};
-          int index[3];
-          std::array<int, 3> wrap = {0, 0, 0};  // j's image: + wrap cell edges
-          bool skip = false;
-          for (int d = 0; d < 3 && !skip; ++d) {
-            index[d] = home[d] + offset[d];
-            if (cell_count_[d] == 1 && offset[d] != 0) skip = true;
-            if (index[d] < 0 || index[d] >= cell_count_[d]) {
-              if (!cell.periodic[d]) {
-                skip = true;
-              } else {
-                wrap[d] = index[d] < 0 ? -1 : 1;
-                index[d] -= wrap[d] * cell_count_[d];
-              }
-            }
-          }
-          if (skip) continue;
-          const int other = (index[2] * cell_count_[1] + index[1]) * cell_count_[0] + index[0];
+    // Per axis, the bins to search and the image of j each one stands for. With 3 bins or more
+    // on a periodic axis, the stencil home - 1 .. home + 1 meets each (j, image) once, through
+    // the bin that holds j, so the stencil's wrap is the image. A periodic axis 1 or 2 bins thick
+    // (a small RVE compressed or stretched) has every bin searched at each of the images -1, 0,
+    // +1, which again meets each (j, image) once.
+    BinReach reach_along[3][6];
+    int reach_count[3] = {0, 0, 0};
+    for (int d = 0; d < 3; ++d) {
+      if (cell.periodic[d] && cell_count_[d] < 3) {
+        for (int wrap = -1; wrap <= 1; ++wrap) {
+          for (int b = 0; b < cell_count_[d]; ++b) reach_along[d][reach_count[d]++] = {b, wrap};
+        }
+        continue;
+      }
+      for (int offset = -1; offset <= 1; ++offset) {
+        int index = home[d] + offset;
+        int wrap = 0;
+        if (index < 0 || index >= cell_count_[d]) {
+          if (!cell.periodic[d]) continue;
+          wrap = index < 0 ? -1 : 1;
+          index -= wrap * cell_count_[d];
+        }
+        reach_along[d][reach_count[d]++] = {index, wrap};
+      }
+    }
+    for (int kz = 0; kz < reach_count[2]; ++kz) {
+      for (int ky = 0; ky < reach_count[1]; ++ky) {
+        for (int kx = 0; kx < reach_count[0]; ++kx) {
+          const BinReach& x = reach_along[0][kx];
+          const BinReach& y = reach_along[1][ky];
+          const BinReach& z = reach_along[2][kz];
+          const std::array<int, 3> wrap = {x.wrap, y.wrap, z.wrap};  // j's image: + wrap edges
+          const int other = (z.index * cell_count_[1] + y.index) * cell_count_[0] + x.index;
+          const Vec3 shift = cell.edges_m * Vec3(wrap[0], wrap[1], wrap[2]);
           for (int k = cell_start_[other]; k < cell_start_[other + 1]; ++k) {
             const int j = cell_particles_[k];
             if (j <= i) continue;
-            // With at least 3 bins per periodic axis each (j, image) is met once, through the
-            // bin that holds it, so the stencil's wrap is the image.
-            const Vec3 shift = cell.edges_m * Vec3(wrap[0], wrap[1], wrap[2]);
             const Vec3 separation = particles.position_m[j] + shift - particles.position_m[i];
             const double reach = particles.radius_m[i] + particles.radius_m[j] + skin_m;
             if (separation.squaredNorm() >= reach * reach) continue;

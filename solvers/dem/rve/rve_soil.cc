@@ -199,8 +199,8 @@ void RegisterRveMaterial(material::MaterialRegistry& registry) {
            -> std::unique_ptr<material::ConstitutiveModel> {
          return MakeRveMaterial(RveMaterialParamsFromMap(parameters));
        },
-       // Cheap: 100 grains (72 would leave a cell thinner than three neighbour bins) and 30
-       // relaxation steps keep the material contract test at about a second.
+       // Cheap: 100 grains (the soil model's least) and 30 relaxation steps keep the material
+       // contract test at about a second.
        {{"grains_per_rve", 100},
         {"consolidation_pressure_pa", 100e3},
         {"seed", 1},

@@ -4,8 +4,11 @@
 
 #include <cmath>
 #include <random>
+#include <set>
+#include <tuple>
 
 #include "solvers/common/errors.h"
+#include "solvers/dem/neighbor_list.h"
 #include "solvers/dem/simulation.h"
 
 namespace gonogo::dem {
@@ -261,6 +264,67 @@ TEST(DeformingCell, SaveAndRestoreContinueBitIdentically) {
         << error.what();
   }
   EXPECT_EQ(untouched.SaveState(), before);
+}
+
+// A cell squeezed along z until it is 1, 2, 3 or 5 neighbour bins thick (a small RVE under a
+// plate), and sheared: the linked-cell list holds exactly the (i, j, image) a search over all 27
+// images of every pair finds within r_i + r_j + skin. Two images of one neighbour can both be
+// within reach in the thinnest cells; each is a pair of its own.
+TEST(NeighbourList, ThinShearedCellsListEveryImageWithinReachOnce) {
+  const double radius_m = 1e-3, skin_m = 0.2e-3, reach_max_m = 2 * 1.05 * radius_m + skin_m;
+  for (double bins_thick : {1.2, 2.5, 3.5, 5.5}) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    Cell cell;
+    cell.edges_m << 12e-3, 0.0, 0.3 * bins_thick * reach_max_m,  //
+        0.0, 11e-3, 0.0,                                        //
+        0.0, 0.0, bins_thick * reach_max_m;
+    Particles grains;
+    for (int g = 0; g < 60; ++g) {
+      const Vec3 fraction(unit(random), unit(random), unit(random));
+      grains.Add(cell.edges_m * fraction, Vec3::Zero(), radius_m * (0.95 + 0.1 * unit(random)),
+                 2650.0);
+    }
+    std::set<std::tuple<int, int, int, int, int>> expected;
+    for (int i = 0; i < 60; ++i) {
+      for (int j = i + 1; j < 60; ++j) {
+        for (int wx = -1; wx <= 1; ++wx) {
+          for (int wy = -1; wy <= 1; ++wy) {
+            for (int wz = -1; wz <= 1; ++wz) {
+              const Vec3 separation = grains.position_m[j] +
+                                      cell.edges_m * Vec3(wx, wy, wz) - grains.position_m[i];
+              const double reach = grains.radius_m[i] + grains.radius_m[j] + skin_m;
+              if (separation.squaredNorm() < reach * reach) expected.insert({i, j, wx, wy, wz});
+            }
+          }
+        }
+      }
+    }
+    NeighborList list;
+    list.Build(grains, cell, skin_m, 1);
+    std::set<std::tuple<int, int, int, int, int>> listed;
+    for (const NeighborPair& pair : list.pairs()) {
+      const bool inserted =
+          listed.insert({pair.i, pair.j, pair.image[0], pair.image[1], pair.image[2]}).second;
+      EXPECT_TRUE(inserted) << bins_thick << " bins: pair " << pair.i << "-" << pair.j
+                            << " listed twice";
+    }
+    EXPECT_EQ(listed, expected) << bins_thick << " bins thick";
+    EXPECT_GT(expected.size(), 20u);
+  }
+  // Thinner than one reach: refused, naming the cause.
+  Cell flat;
+  flat.edges_m = Eigen::Vector3d(12e-3, 11e-3, 0.8 * reach_max_m).asDiagonal();
+  Particles two;
+  two.Add(Vec3(1e-3, 1e-3, 0.5e-3), Vec3::Zero(), 1.05 * radius_m, 2650.0);
+  two.Add(Vec3(5e-3, 5e-3, 0.5e-3), Vec3::Zero(), 1.05 * radius_m, 2650.0);
+  NeighborList list;
+  try {
+    list.Build(two, flat, skin_m, 1);
+    ADD_FAILURE() << "a cell thinner than 2 r_max + skin was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 r_max + skin thick"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

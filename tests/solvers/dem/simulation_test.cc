@@ -176,7 +176,7 @@ TEST(Simulation, RayleighStepAndValidation) {
   params.threads = 0;
   EXPECT_THROW(Simulation(params, grains), InputError);
   params.threads = 1;
-  params.box.hi_m = Vec3::Constant(4e-3);  // < 3 (2 r + skin): no unique minimum image
+  params.box.hi_m = Vec3::Constant(1.5e-3);  // < 2 r + skin: a grain would touch its own image
   EXPECT_THROW(Simulation(params, grains).Step(), InputError);
 }
 
