@@ -49,7 +49,7 @@ PlateTest RunPlate(const SoilBinFactory& soil_bin, double radius_m, const Bevame
   const FlatTool plate = s.AttachFlatTool(0, radius_m);
   PlateTest test;
   test.radius_m = std::sqrt(plate.area_m2 / kPi);
-  const double ramp_s = 0.02;
+  const double ramp_s = spec.start_ramp_s;
   const double duration = spec.plate_sinkage_m / spec.plate_speed_m_s + 0.5 * ramp_s;
   const int steps = static_cast<int>(std::ceil(duration / dt));
   const double start = s.time_s();
@@ -110,10 +110,10 @@ RingTest RunRing(const SoilBinFactory& soil_bin, double normal_pressure_pa,
     s.DriveFlatTool(ring.id, drive);
     StepOrThrow(s, dt, options, k, "shear ring loading");
   }
-  s.SetDampingPerS(0.2 * s.SettlingDampingPerS());
+  s.SetDampingPerS(spec.ring_damping_fraction * s.SettlingDampingPerS());
   RingTest test;
   test.normal_pressure_pa = normal_pressure_pa;
-  const double ramp_s = 0.02;
+  const double ramp_s = spec.start_ramp_s;
   const double angular_speed = spec.ring_speed_m_s / mean_radius;
   const double duration = spec.ring_shear_displacement_m / spec.ring_speed_m_s + 0.5 * ramp_s;
   const int steps = static_cast<int>(std::ceil(duration / dt));
@@ -155,6 +155,11 @@ void BevameterSpec::Validate(const std::string& p) const {
   }
   Require(ring_shear_displacement_m > 0, p + "ring_shear_displacement_m", "must be positive");
   Require(ring_speed_m_s > 0, p + "ring_speed_m_s", "must be positive");
+  Require(std::isfinite(start_ramp_s) && start_ramp_s > 0, p + "start_ramp_s",
+          "must be a positive time, s");
+  Require(std::isfinite(ring_damping_fraction) && ring_damping_fraction >= 0 &&
+              ring_damping_fraction <= 1,
+          p + "ring_damping_fraction", "must lie in [0, 1]");
 }
 
 BevameterResult RunVirtualBevameter(const FeSoil& soil, const BevameterSpec& spec,

@@ -28,6 +28,11 @@ struct BevameterSpec {
   std::vector<double> ring_normal_pressures_pa = {10e3, 20e3, 40e3};
   double ring_shear_displacement_m = 0.04;  // at the ring's mean radius
   double ring_speed_m_s = 0.2;              // at the mean radius
+  // Smooth start of the plate push and of the ring's turn, s.
+  double start_ramp_s = 0.02;
+  // Mass damping while the ring turns, as a fraction of the bin's settling damping (the soil
+  // under the ring turns with it, so a mass-scaled bin feels this drag scaled up).
+  double ring_damping_fraction = 0.2;
   void Validate(const std::string& field_prefix) const;
 };
 

@@ -5,20 +5,33 @@
 //                --wheel-load 1000 --preset ci [--slip-step 0.25] [overrides ...]
 //   mpirun -np 3 gonogo-fe-de ... (same options on every rank)
 //
-// Prints the curve as CSV (the columns of `gonogo curve --csv`) on stdout and the run's figures
+//   gonogo-fe-de --calibrate --soil seed000_sand_rve100 --wheel-diameter 0.5 ... --preset ci
+//                (RVE triaxials, the Drucker-Prager fit and its twin curve beside fe-de's)
+//   gonogo-fe-de --bevameter --soil seed000_sand_rve100 --preset ci [--element-size 0.05]
+//                [--ring-pressures 10e3,20e3,40e3] (the virtual bevameter on the same soil)
+//
+// Prints the curve (or the bevameter's curves and fit) as CSV (the columns of `gonogo curve --csv`) on stdout and the run's figures
 // (mesh, FE steps, ranks, wall time, load imbalance, migrations, bytes per step) on stderr; with
 // --balance-csv FILE, one row per FE step of the balance records. Exit status: 0 done, 1 failed,
 // 2 bad options.
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <fstream>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "solvers/common/cli_checks.h"
 #include "solvers/common/errors.h"
+#include "solvers/common/units.h"
+#include "solvers/tiers/fe_de_calibration.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "solvers/tiers/soil_catalogue.h"
 
@@ -38,9 +51,18 @@ struct CommandLine {
   int min_de_steps = 0, threads = 1;
   int relax_steps = -1;  // -1: the preset's; 0 is a valid choice (no relaxation)
   std::string balance_csv;
+  double stop_after_s = 0;  // > 0: stop the curve after this much wall time and report its pace
+  bool bevameter = false;
+  bool twin = false;
+  bool calibrate = false;
+  std::vector<double> triaxial_pressures_pa = {5e3, 15e3, 40e3};
+  double triaxial_strain = 0.1;
+  double element_size_m = 0;
+  rig::BevameterSpec bevameter_spec;
 };
 
-int Run(const CommandLine& line, int rank) {
+tiers::FeDeOptions OptionsOf(const CommandLine& line) {
+
   tiers::FeDeOptions options = tiers::FeDeOptions::Preset(line.preset);
   if (line.elements_per_radius > 0) options.elements_per_radius = line.elements_per_radius;
   if (line.fe_time_step_s > 0) options.fe_time_step_s = line.fe_time_step_s;
@@ -51,9 +73,10 @@ int Run(const CommandLine& line, int rank) {
   if (line.slip_ramp_s > 0) options.procedure.slip_ramp_s = line.slip_ramp_s;
   if (line.self_propelled_s > 0) options.procedure.self_propelled_s = line.self_propelled_s;
   options.threads = line.threads;
-  const tiers::FeDeTier tier(options);
+  return options;
+}
 
-  TractionRequest request;
+SoilParameters SoilOf(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil_name, "dem-hertz-mindlin");
   if (entry == nullptr) {
@@ -64,13 +87,19 @@ int Run(const CommandLine& line, int rank) {
   if (line.consolidation_pressure_pa > 0) {
     soil.values["consolidation_pressure_pa"] = line.consolidation_pressure_pa;
   }
-  request.soil.parameters = soil;
-  request.tyre.diameter_m = line.wheel_diameter_m;
-  request.tyre.width_m = line.wheel_width_m;
-  request.tyre.section_height_m = 0.25 * line.wheel_diameter_m;  // not read by the tier
-  request.wheel_load_n = line.wheel_load_n;
-  request.slips = TractionRequest::SlipSweep(line.slip_step);
+  return soil;
+}
 
+void PrintFigures(const tiers::FeDeRunFigures& figures) {
+  if (figures.balance.empty()) return;
+  std::fprintf(stderr,
+               "load imbalance (max / mean - 1 of RVE seconds per step): mean %.3f, max %.3f; "
+               "%d RVEs migrated; %.0f bytes per FE step through rank 0\n",
+               figures.MeanImbalance(), figures.MaxImbalance(), figures.PointsMoved(),
+               figures.MeanBytesPerStep());
+}
+
+ComputeContext ContextOf(const CommandLine& line, int rank) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   ComputeContext context;
@@ -82,6 +111,173 @@ int Run(const CommandLine& line, int rank) {
       std::fflush(stderr);
     };
   }
+  return context;
+}
+
+// The Drucker-Prager fit to the soil's RVE triaxials, printed as comment lines (rank 0).
+material::DruckerPragerParams FitTwin(const CommandLine& line, const tiers::FeDeTier& tier,
+                                      const SoilParameters& soil) {
+  const dem::rve::RveMaterialParams params =
+      dem::rve::RveMaterialParamsFromSoil(soil, tier.options().numerics, "soil.parameters");
+  const auto rve = dem::rve::SharedRveMaterial(params);
+  std::vector<tiers::TriaxialCurve> curves;
+  for (double pressure : line.triaxial_pressures_pa) {
+    std::fprintf(stderr, "triaxial at %.0f Pa\n", pressure);
+    curves.push_back(tiers::RunRveTriaxial(*rve, pressure, line.triaxial_strain, 200));
+  }
+  const tiers::TriaxialFit fit = tiers::FitDruckerPragerToTriaxials(curves);
+  std::printf("# RVE drained triaxials (compression positive): sigma3_pa,sigma3_at_peak_pa,"
+              "peak_q_pa,axial_strain_at_peak,peak_friction_deg,E50_pa,nu50,dilatancy_at_peak,"
+              "psi_deg\n");
+  for (size_t k = 0; k < curves.size(); ++k) {
+    const tiers::TriaxialCurveFit& c = fit.curves[k];
+    const double s3 = c.lateral_stress_at_peak_pa, s1 = s3 + c.peak_deviator_pa;
+    std::printf("# %.0f,%.1f,%.1f,%.4f,%.2f,%.4g,%.3f,%.3f,%.2f\n", curves[k].confining_pa, s3,
+                c.peak_deviator_pa, c.axial_strain_at_peak,
+                units::RadiansToDegrees(std::asin((s1 - s3) / (s1 + s3))), c.secant_young_pa,
+                c.secant_poisson, c.dilatancy_at_peak, c.dilation_angle_deg);
+  }
+  const material::DruckerPragerParams& dp = fit.strength;
+  std::printf("# fitted Drucker-Prager (triaxial-compression match): E=%.4g Pa, nu=%.3f, "
+              "c=%.1f Pa, phi=%.2f deg, psi=%.2f deg\n",
+              dp.young_pa, dp.poisson, dp.cohesion_pa, dp.friction_angle_deg,
+              dp.dilation_angle_deg);
+  std::fflush(stdout);
+  return dp;
+}
+
+int RunBevameter(const CommandLine& line, int rank) {
+  const tiers::FeDeTier tier(OptionsOf(line));
+  SoilState soil;
+  soil.parameters = SoilOf(line);
+  std::optional<material::DruckerPragerParams> twin;
+  if (line.twin) twin = FitTwin(line, tier, *soil.parameters);
+  const tiers::FeDeBevameterReport report =
+      tier.RunBevameter(soil, line.bevameter_spec, line.element_size_m, ContextOf(line, rank),
+                        twin ? &*twin : nullptr);
+  if (rank != 0) return 0;
+  std::fprintf(stderr, "\r");
+  if (line.twin) {  // what the ring imposes, on the RVE alone: simple shear at its pressures
+    const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
+        *soil.parameters, tier.options().numerics, "soil.parameters"));
+    std::printf("# RVE simple shear at the ring pressures: normal_pa,peak_tau_pa,gamma_at_peak,"
+                "tau_at_gamma_0.5_pa,held_normal_at_peak_pa\n");
+    for (double pressure : line.bevameter_spec.ring_normal_pressures_pa) {
+      const tiers::SimpleShearCurve shear = tiers::RunRveSimpleShear(*rve, pressure, 0.5, 100);
+      const size_t peak = static_cast<size_t>(
+          std::max_element(shear.shear_stress_pa.begin(), shear.shear_stress_pa.end()) -
+          shear.shear_stress_pa.begin());
+      std::printf("# %.0f,%.1f,%.3f,%.1f,%.1f\n", pressure, shear.shear_stress_pa[peak],
+                  shear.shear_strain[peak], shear.shear_stress_pa.back(),
+                  shear.normal_stress_pa[peak]);
+    }
+  }
+  rig::PrintBevameter(report.bevameter, stdout);
+  std::fprintf(stderr, "%s bevameter (%s): %d rank(s) x %d thread(s), %.1f s wall\n",
+               tier.Version().c_str(), line.soil_name.c_str(), report.ranks, line.threads,
+               report.wall_seconds);
+  PrintFigures(report);
+  return 0;
+}
+
+TractionRequest RequestOf(const CommandLine& line) {
+  for (const auto& [value, name] : {std::pair{line.wheel_diameter_m, "--wheel-diameter"},
+                                    std::pair{line.wheel_width_m, "--wheel-width"},
+                                    std::pair{line.wheel_load_n, "--wheel-load"}}) {
+    if (!(value > 0)) throw InputError(name, "is required (a positive number) for a curve");
+  }
+  TractionRequest request;
+  request.soil.parameters = SoilOf(line);
+  request.tyre.diameter_m = line.wheel_diameter_m;
+  request.tyre.width_m = line.wheel_width_m;
+  request.tyre.section_height_m = 0.25 * line.wheel_diameter_m;  // not read by the tier
+  request.wheel_load_n = line.wheel_load_n;
+  request.slips = TractionRequest::SlipSweep(line.slip_step);
+  return request;
+}
+
+// The calibration chain (fe_de_calibration.h): RVE triaxials, the Drucker-Prager fit, its
+// continuum twin on rank 0, then the fe-de curve on every rank; both curves side by side.
+int RunCalibration(const CommandLine& line, int rank) {
+  const tiers::FeDeTier tier(OptionsOf(line));
+  const TractionRequest request = RequestOf(line);
+  tiers::FeDeRunReport twin;
+  if (rank == 0) {
+    const material::DruckerPragerParams dp = FitTwin(line, tier, *request.soil.parameters);
+    ComputeContext alone = ContextOf(line, rank);
+    alone.communicator = MPI_COMM_NULL;
+    twin = tier.RunContinuumTwin(request, dp, alone);
+    std::fprintf(stderr, "\rtwin: %d elements, %d FE steps, %.1f s wall\n", twin.elements,
+                 twin.fe_steps, twin.wall_seconds);
+  }
+  const tiers::FeDeRunReport report = tier.Run(request, ContextOf(line, rank));
+  if (rank != 0) return 0;
+  std::fprintf(stderr, "\rfe-de: %d elements, %d FE steps, %d rank(s), %.1f s wall\n",
+               report.elements, report.fe_steps, report.ranks, report.wall_seconds);
+  const double load = request.wheel_load_n, rw = 0.5 * request.tyre.diameter_m * load;
+  std::printf("slip,fe_de_DW,twin_DW,fe_de_T_rW,twin_T_rW,fe_de_sinkage_mm,twin_sinkage_mm\n");
+  for (size_t k = 0; k < report.curve.points.size() && k < twin.curve.points.size(); ++k) {
+    const TractionPoint& a = report.curve.points[k];
+    const TractionPoint& b = twin.curve.points[k];
+    std::printf("%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%.1f\n", a.slip, a.drawbar_pull_n / load,
+                b.drawbar_pull_n / load, a.torque_nm / rw, b.torque_nm / rw, 1e3 * a.sinkage_m,
+                1e3 * b.sinkage_m);
+  }
+  return 0;
+}
+
+// A configuration too long to finish here: run it for line.stop_after_s of wall time (alone),
+// then report the FE steps done (from the progress, a fraction of the procedure's simulated time)
+// and the pace, and the whole curve at that pace.
+int MeasurePace(const CommandLine& line, const tiers::FeDeTier& tier,
+                const TractionRequest& request, ComputeContext context, int rank) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  double fraction_done = 0, first_report_s = -1, first_fraction = 0, last_report_s = 0;
+  context.progress = [&](double fraction) {
+    if (first_report_s < 0) {  // the first report comes after the setup (templates, depths)
+      first_report_s = elapsed();
+      first_fraction = fraction;
+    }
+    fraction_done = fraction;
+    last_report_s = elapsed();  // the pace runs from the first report to the last
+    std::fprintf(stderr, "\r  %5.2f %% after %.0f s", 100 * fraction, elapsed());
+  };
+  const double limit_s = line.stop_after_s;
+  context.cancelled = [&] { return elapsed() > limit_s; };
+  try {
+    tier.Run(request, context);
+  } catch (const CancelledError&) {
+  }
+  if (rank != 0) return 0;
+  const tiers::FeDeOptions& o = tier.options();
+  const rig::DrawbarPullProcedure& p = o.procedure;
+  const double procedure_s =
+      p.gravity_settle_s + p.load_settle_s + p.self_propelled_s + p.slip_ramp_s;
+  const double total_steps = procedure_s / o.fe_time_step_s;
+  const double steps = (fraction_done - first_fraction) * total_steps;
+  const double stepping_s = last_report_s - first_report_s;
+  std::fprintf(stderr,
+               "\n%s, %g grains per RVE: setup %.1f s; %.0f of %.0f FE steps (%.2f %% of the "
+               "procedure, %.3f s simulated) in %.1f s, %.2f s per FE step; the whole procedure "
+               "at this pace: %.2f h\n",
+               tier.Version().c_str(), request.soil.parameters->Get("grains_per_rve"),
+               first_report_s, steps, total_steps, 100 * fraction_done, fraction_done * procedure_s,
+               stepping_s, stepping_s / std::max(steps, 1.0),
+               (first_report_s + total_steps * stepping_s / std::max(steps, 1.0)) / 3600);
+  return 0;
+}
+
+int Run(const CommandLine& line, int rank) {
+  if (line.bevameter) return RunBevameter(line, rank);
+  if (line.calibrate) return RunCalibration(line, rank);
+  const tiers::FeDeTier tier(OptionsOf(line));
+  const TractionRequest request = RequestOf(line);
+  const SoilParameters& soil = *request.soil.parameters;
+  ComputeContext context = ContextOf(line, rank);
+  if (line.stop_after_s > 0) return MeasurePace(line, tier, request, context, rank);
   const tiers::FeDeRunReport report = tier.Run(request, context);
   if (rank != 0) return 0;
   std::fprintf(stderr, "\r");
@@ -100,13 +296,7 @@ int Run(const CommandLine& line, int rank) {
                tier.Version().c_str(), line.soil_name.c_str(), report.elements,
                soil.Get("grains_per_rve"), report.fe_steps, report.fe_time_step_s, report.ranks,
                line.threads, report.wall_seconds);
-  if (!report.balance.empty()) {
-    std::fprintf(stderr,
-                 "load imbalance (max / mean - 1 of RVE seconds per step): mean %.3f, max %.3f; "
-                 "%d RVEs migrated; %.0f bytes per FE step through rank 0\n",
-                 report.MeanImbalance(), report.MaxImbalance(), report.PointsMoved(),
-                 report.MeanBytesPerStep());
-  }
+  PrintFigures(report);
   if (!line.balance_csv.empty()) {
     std::ofstream out(line.balance_csv);
     out << "step,imbalance,imbalance_after,points_moved,bytes_sent,bytes_received";
@@ -135,9 +325,64 @@ int main(int argc, char** argv) {
   app.add_option("--consolidation-pressure", line.consolidation_pressure_pa,
                  "override the RVE's preparation pressure, Pa")
       ->check(finite);
-  app.add_option("--wheel-diameter", line.wheel_diameter_m, "m")->required()->check(finite);
-  app.add_option("--wheel-width", line.wheel_width_m, "m")->required()->check(finite);
-  app.add_option("--wheel-load", line.wheel_load_n, "N")->required()->check(finite);
+  app.add_option("--wheel-diameter", line.wheel_diameter_m, "m (a curve)")->check(finite);
+  app.add_option("--wheel-width", line.wheel_width_m, "m (a curve)")->check(finite);
+  app.add_option("--wheel-load", line.wheel_load_n, "N (a curve)")->check(finite);
+  app.add_flag("--calibrate", line.calibrate,
+               "the calibration chain: RVE triaxials, a Drucker-Prager fit, and its continuum "
+               "twin's curve beside the fe-de curve");
+  app.add_option("--triaxial-pressures", line.triaxial_pressures_pa,
+                 "calibration: confining pressures of the RVE triaxials, Pa")
+      ->delimiter(',')
+      ->check(finite);
+  app.add_option("--triaxial-strain", line.triaxial_strain,
+                 "calibration: axial strain the triaxials reach")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_flag("--twin", line.twin,
+               "bevameter: on the continuum twin (the Drucker-Prager fit to the RVE triaxials) "
+               "instead of the RVEs");
+  app.add_flag("--bevameter", line.bevameter,
+               "run the virtual bevameter (plates and shear rings) instead of a curve");
+  app.add_option("--element-size", line.element_size_m,
+                 "bevameter: bin resolution, m (0: a quarter of the small plate / ring width)")
+      ->check(finite);
+  app.add_option("--ring-pressures", line.bevameter_spec.ring_normal_pressures_pa,
+                 "bevameter: shear-ring normal pressures, Pa")
+      ->delimiter(',')
+      ->check(finite);
+  app.add_option("--plate-radius", line.bevameter_spec.small_plate_radius_m,
+                 "bevameter: the small plate's radius, m")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--large-plate-radius", line.bevameter_spec.large_plate_radius_m,
+                 "bevameter: the large plate's radius, m")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--ring-inner-radius", line.bevameter_spec.ring_inner_radius_m,
+                 "bevameter: shear ring, m")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--ring-outer-radius", line.bevameter_spec.ring_outer_radius_m,
+                 "bevameter: shear ring, m")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--start-ramp-s", line.bevameter_spec.start_ramp_s,
+                 "bevameter: smooth start of the plate push and the ring's turn, s")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--ring-damping", line.bevameter_spec.ring_damping_fraction,
+                 "bevameter: mass damping while the ring turns, fraction of the settling damping")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--plate-sinkage", line.bevameter_spec.plate_sinkage_m,
+                 "bevameter: plate push depth, m")
+      ->check(finite)
+      ->capture_default_str();
+  app.add_option("--ring-displacement", line.bevameter_spec.ring_shear_displacement_m,
+                 "bevameter: ring shear displacement at its mean radius, m")
+      ->check(finite)
+      ->capture_default_str();
   app.add_option("--slip-step", line.slip_step, "slips 0, step, ... 1")
       ->check(finite)
       ->capture_default_str();
@@ -159,6 +404,10 @@ int main(int argc, char** argv) {
   app.add_option("--threads", line.threads, "OpenMP threads per rank")
       ->check(cli_checks::AtLeastOne())
       ->capture_default_str();
+  app.add_option("--stop-after-s", line.stop_after_s,
+                 "stop the curve after this wall time and report its pace (configurations too "
+                 "long to finish)")
+      ->check(finite);
   app.add_option("--balance-csv", line.balance_csv, "write the per-step balance records here");
   CLI11_PARSE(app, argc, argv);
 

@@ -112,25 +112,25 @@ void FeDeTier::ValidateSoil(const SoilState& soil, const std::string& field) con
                                       field + ".parameters");
 }
 
-int FeDeRunReport::PointsMoved() const {
+int FeDeRunFigures::PointsMoved() const {
   int moved = 0;
   for (const bridge::StepBalance& step : balance) moved += step.points_moved;
   return moved;
 }
 
-double FeDeRunReport::MeanImbalance() const {
+double FeDeRunFigures::MeanImbalance() const {
   double sum = 0;
   for (const bridge::StepBalance& step : balance) sum += step.imbalance;
   return balance.empty() ? 0 : sum / static_cast<double>(balance.size());
 }
 
-double FeDeRunReport::MaxImbalance() const {
+double FeDeRunFigures::MaxImbalance() const {
   double largest = 0;
   for (const bridge::StepBalance& step : balance) largest = std::max(largest, step.imbalance);
   return largest;
 }
 
-double FeDeRunReport::MeanBytesPerStep() const {
+double FeDeRunFigures::MeanBytesPerStep() const {
   double sum = 0;
   for (const bridge::StepBalance& step : balance) {
     sum += static_cast<double>(step.bytes_sent + step.bytes_received);
@@ -143,37 +143,37 @@ TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
   return Run(request, context).curve;
 }
 
-FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext& context) const {
+bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& context,
+                         const BinWork& work, FeDeRunFigures* figures,
+                         std::shared_ptr<const material::ConstitutiveModel> continuum) const {
   const auto start = std::chrono::steady_clock::now();
-  request.Validate();
-  const SoilParameters soil = ResolveSoil(request.soil, "soil");
   dem::rve::RveMaterialParams params =
       dem::rve::RveMaterialParamsFromSoil(soil, options_.numerics, "soil.parameters");
   // Every rank builds the same template RVE (deterministic generation), so a point's state means
   // the same wherever it lives.
   const std::shared_ptr<const dem::rve::RveMaterial> rve = dem::rve::SharedRveMaterial(params);
 
+  const MPI_Comm communicator = continuum ? MPI_COMM_NULL : context.communicator;
   int group_rank = 0;
-  if (context.communicator != MPI_COMM_NULL) MPI_Comm_rank(context.communicator, &group_rank);
+  if (communicator != MPI_COMM_NULL) MPI_Comm_rank(communicator, &group_rank);
   if (group_rank != 0) {
     // An RVE server until rank 0 finishes; it joins rank 0's collective cancellation checks.
     bool cancelled = false;
-    bridge::ServeRankGroup(context.communicator, *rve, bridge::ServeOptions{context.threads},
+    bridge::ServeRankGroup(communicator, *rve, bridge::ServeOptions{context.threads},
                            [&](int code) {
                              if (code == kCallCancelCheck) cancelled = context.Cancelled();
                            });
     if (cancelled) throw CancelledError();
-    return {};  // the leader's curve is the task's
+    return false;  // the leader's result is the task's
   }
-
-  FeDeRunReport report;
 
   std::shared_ptr<bridge::RankGroupLink> link;
   std::shared_ptr<const bridge::DistributedModel> distributed;
-  std::shared_ptr<const material::ConstitutiveModel> model = rve;
-  if (context.communicator != MPI_COMM_NULL) {
-    link = std::make_shared<bridge::RankGroupLink>(context.communicator);
-    report.ranks = link->size();
+  std::shared_ptr<const material::ConstitutiveModel> model = continuum ? continuum : rve;
+  figures->ranks = 1;
+  if (communicator != MPI_COMM_NULL) {
+    link = std::make_shared<bridge::RankGroupLink>(communicator);
+    figures->ranks = link->size();
     bridge::BalanceOptions balance = options_.balance;
     balance.rank_zero_threads = context.threads;
     distributed = std::make_shared<bridge::DistributedModel>(link, rve, balance);
@@ -188,20 +188,19 @@ FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext
   // Geostatic start: the template settled at the mean stress of each depth (rank 0 only; the
   // states reach their owners as bytes).
   const double unit_weight_n_m3 = bin_soil.density_kg_m3 * units::kStandardGravityMps2;
-  bin_soil.initial_state_at_depth = [&](double depth_m) {
-    dem::rve::Rve settled = rve->initial();
-    settled.SettleIsotropic(std::max(options_.min_initial_pressure_pa, unit_weight_n_m3 * depth_m));
-    return settled.Save();
-  };
+  const double floor_pa = options_.min_initial_pressure_pa;
+  if (!continuum) {  // (a continuum soil starts unstressed and settles under gravity)
+    bin_soil.initial_state_at_depth = [rve, unit_weight_n_m3, floor_pa](double depth_m) {
+      dem::rve::Rve settled = rve->initial();
+      settled.SettleIsotropic(std::max(floor_pa, unit_weight_n_m3 * depth_m));
+      return settled.Save();
+    };
+  }
   rig::FeBinOptions fe_options;
   fe_options.threads = context.threads;
   fe_options.target_time_step_s = options_.fe_time_step_s;
   const rig::FeSoilBinFactory bins(bin_soil, fe_options);
 
-  rig::RigWheel wheel;
-  wheel.radius_m = 0.5 * request.tyre.diameter_m;
-  wheel.width_m = request.tyre.width_m;
-  wheel.load_n = request.wheel_load_n;
   rig::RigOptions rig_options;
   rig_options.elements_per_radius = options_.elements_per_radius;
   rig_options.threads = context.threads;
@@ -214,23 +213,78 @@ FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext
     if (link) link->Call(kCallCancelCheck);
     return context.Cancelled();
   };
-  TractionCurve& curve = report.curve;
+  work(bins, rig_options);
+  if (link) link->Finish();
+  if (distributed) figures->balance = distributed->balance_history();
+  figures->wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+void FeDeTier::RollWheel(const TractionRequest& request, const rig::SoilBinFactory& bins,
+                         const rig::RigOptions& rig_options, FeDeRunReport* report) const {
+  rig::RigWheel wheel;
+  wheel.radius_m = 0.5 * request.tyre.diameter_m;
+  wheel.width_m = request.tyre.width_m;
+  wheel.load_n = request.wheel_load_n;
+  TractionCurve& curve = report->curve;
   curve.tier = Name();
   curve.tier_version = Version();
   try {
     const rig::RigRun run = rig::RunDrawbarPullTest(bins, wheel, options_.procedure, rig_options);
     curve.points = rig::CurveFromRun(run, request.slips, wheel.radius_m);
-    report.elements = run.elements;
-    report.fe_steps = run.steps;
-    report.fe_time_step_s = run.time_step_s;
+    report->elements = run.elements;
+    report->fe_steps = run.steps;
+    report->fe_time_step_s = run.time_step_s;
   } catch (const CannotCarryError& e) {
     curve.points.clear();
     curve.immobile_reason = e.what();
   }
-  if (link) link->Finish();
-  if (distributed) report.balance = distributed->balance_history();
-  report.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+FeDeRunReport FeDeTier::Run(const TractionRequest& request, const ComputeContext& context) const {
+  request.Validate();
+  const SoilParameters soil = ResolveSoil(request.soil, "soil");
+  FeDeRunReport report;
+  const auto roll = [&](const rig::SoilBinFactory& bins, const rig::RigOptions& rig_options) {
+    RollWheel(request, bins, rig_options, &report);
+  };
+  if (!RunOnBins(soil, context, roll, &report)) return {};
+  return report;
+}
+
+FeDeRunReport FeDeTier::RunContinuumTwin(const TractionRequest& request,
+                                         const material::DruckerPragerParams& strength,
+                                         const ComputeContext& context) const {
+  request.Validate();
+  const SoilParameters soil = ResolveSoil(request.soil, "soil");
+  const auto model = std::make_shared<const material::DruckerPrager>(strength);
+  FeDeRunReport report;
+  const auto roll = [&](const rig::SoilBinFactory& bins, rig::RigOptions& rig_options) {
+    rig_options.checkpoint_dir.clear();
+    RollWheel(request, bins, rig_options, &report);
+  };
+  RunOnBins(soil, context, roll, &report, model);
+  report.curve.tier = "fe-de-twin";
+  return report;
+}
+
+FeDeBevameterReport FeDeTier::RunBevameter(
+    const SoilState& soil_state, const rig::BevameterSpec& spec, double element_size_m,
+    const ComputeContext& context, const material::DruckerPragerParams* continuum_twin) const {
+  spec.Validate("bevameter.");
+  Require(std::isfinite(element_size_m) && element_size_m >= 0, "bevameter.element_size_m",
+          "must be a length >= 0, m (0: the bevameter's own choice)");
+  const SoilParameters soil = ResolveSoil(soil_state, "soil");
+  FeDeBevameterReport report;
+  const auto test = [&](const rig::SoilBinFactory& bins, rig::RigOptions& rig_options) {
+    rig_options.element_size_m = element_size_m;
+    rig_options.checkpoint_dir.clear();  // only the wheel bins checkpoint
+    report.bevameter = rig::RunVirtualBevameter(bins, spec, rig_options);
+  };
+  std::shared_ptr<const material::ConstitutiveModel> twin;
+  if (continuum_twin) twin = std::make_shared<const material::DruckerPrager>(*continuum_twin);
+  if (!RunOnBins(soil, context, test, &report, twin)) return {};
   return report;
 }
 

@@ -20,11 +20,14 @@
 // RVE lives in this process. The curve is the same bit for bit either way.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "solvers/bridge/distributed_point_store.h"
 #include "solvers/common/tier.h"
 #include "solvers/dem/rve/rve_soil.h"
+#include "solvers/material/drucker_prager.h"
+#include "solvers/rig/bevameter.h"
 #include "solvers/rig/wheel_rig.h"
 
 namespace gonogo::tiers {
@@ -57,12 +60,8 @@ struct FeDeOptions {
   void Validate(const std::string& field_prefix) const;
 };
 
-// What one fe-de run did, beside its curve (group rank 0's view; empty on the other ranks).
-struct FeDeRunReport {
-  TractionCurve curve;
-  int elements = 0;            // FE elements = RVEs
-  int fe_steps = 0;
-  double fe_time_step_s = 0;
+// How an fe-de run went (group rank 0's view; empty on the other ranks).
+struct FeDeRunFigures {
   int ranks = 1;               // of the group the RVEs were spread over
   double wall_seconds = 0;
   // Per FE step (each TryUpdate), when the RVEs were distributed; see bridge::StepBalance.
@@ -71,6 +70,19 @@ struct FeDeRunReport {
   double MeanImbalance() const;  // mean over steps of max / mean - 1 of the ranks' RVE seconds
   double MaxImbalance() const;
   double MeanBytesPerStep() const;  // sent + received by the FE rank
+};
+
+// One fe-de traction curve and its run.
+struct FeDeRunReport : FeDeRunFigures {
+  TractionCurve curve;
+  int elements = 0;            // FE elements = RVEs (of the wheel's bin)
+  int fe_steps = 0;
+  double fe_time_step_s = 0;
+};
+
+// The virtual bevameter on the fe-de soil and its run.
+struct FeDeBevameterReport : FeDeRunFigures {
+  rig::BevameterResult bevameter;
 };
 
 class FeDeTier : public TractionTier {
@@ -91,12 +103,40 @@ class FeDeTier : public TractionTier {
   const FeDeOptions& options() const { return options_; }
   // Compute, with the run's figures. Collective as Compute is.
   FeDeRunReport Run(const TractionRequest& request, const ComputeContext& context) const;
+  // The virtual bevameter of rig/bevameter.h (plate pressure-sinkage and shear-ring tests, and
+  // the Bekker-Janosi fit) on FE bins of the same soil, configuration and rank group as Run's:
+  // what seed 000 calibrated its Bekker parameters with, here on the multiscale soil.
+  // element_size_m: the bins' resolution (0: the bevameter's default, a quarter of the small
+  // plate's radius and of the ring's width). Collective as Run is. With `continuum_twin` set:
+  // the same tests on the same bins with that soil instead of the RVEs (as RunContinuumTwin),
+  // alone.
+  FeDeBevameterReport RunBevameter(
+      const SoilState& soil, const rig::BevameterSpec& spec, double element_size_m,
+      const ComputeContext& context,
+      const material::DruckerPragerParams* continuum_twin = nullptr) const;
+  // The continuum twin of Run (fe_de_calibration.h): the same rig, bins, mass scaling and rim
+  // contact, the soil's RVE replaced by `strength` (Drucker-Prager) at the RVE's consolidated
+  // bulk density; alone, whatever the context's communicator. Curve tier "fe-de-twin".
+  FeDeRunReport RunContinuumTwin(const TractionRequest& request,
+                                 const material::DruckerPragerParams& strength,
+                                 const ComputeContext& context) const;
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
                              const ComputeContext& context) const override;
 
  private:
+  using BinWork = std::function<void(const rig::SoilBinFactory& bins, rig::RigOptions& options)>;
+  // On group rank 0: builds the fe-de soil bins (the RVEs distributed over the context's group)
+  // and the rig options of this configuration, calls `work` with them, fills `figures`, returns
+  // true. On the other ranks: serves RVEs until rank 0 is done, returns false. With `continuum`
+  // set, the bins hold it instead of the RVEs, and the run is this process's alone.
+  bool RunOnBins(const SoilParameters& soil, const ComputeContext& context, const BinWork& work,
+                 FeDeRunFigures* figures,
+                 std::shared_ptr<const material::ConstitutiveModel> continuum = nullptr) const;
+  void RollWheel(const TractionRequest& request, const rig::SoilBinFactory& bins,
+                 const rig::RigOptions& rig_options, FeDeRunReport* report) const;
+
   FeDeOptions options_;
 };
 
