@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "solvers/common/errors.h"
@@ -78,17 +79,44 @@ TriaxialCurveFit FitCurve(const TriaxialCurve& curve, double dilatancy_window) {
   return fit;
 }
 
+// The RVE's rate at `inertial_number`: StableRate1S is its own cap, linear in its inertial number.
+double RateAt1S(const dem::rve::Rve& specimen, double inertial_number) {
+  return specimen.StableRate1S() * inertial_number / specimen.params().max_inertial_number;
+}
+
+// Runs `control` for max_strain / rate_1_s of DE time, calling `row` at the start and `rows`
+// times on the way.
+void RunInRows(dem::rve::Rve& specimen, const dem::rve::MixedControl& control, double rate_1_s,
+               double max_strain, int rows, const std::function<void()>& row) {
+  const long total_steps =
+      static_cast<long>(std::ceil(max_strain / (rate_1_s * specimen.time_step_s())));
+  const long steps_per_row = std::max(1L, total_steps / rows);
+  row();
+  for (long step = 0; step < total_steps;) {
+    const long chunk = std::min(steps_per_row, total_steps - step);
+    specimen.Run(control, static_cast<int>(chunk));
+    step += chunk;
+    row();
+  }
+}
+
+void RequireLoading(double pressure_pa, double max_strain, double strain_limit,
+                    const char* strain_limit_text, int rows, double inertial_number,
+                    const std::string& test) {
+  Require(std::isfinite(pressure_pa) && pressure_pa > 0, test + ".pressure_pa",
+          "must be a positive pressure, Pa");
+  Require(std::isfinite(max_strain) && max_strain > 0 && max_strain <= strain_limit,
+          test + ".max_strain", std::string("must lie in (0, ") + strain_limit_text + "]");
+  Require(rows >= 2, test + ".rows", "must be at least 2");
+  Require(std::isfinite(inertial_number) && inertial_number > 0 && inertial_number <= 0.1,
+          test + ".inertial_number", "must lie in (0, 0.1]");
+}
+
 }  // namespace
 
 TriaxialCurve RunRveTriaxial(const dem::rve::RveMaterial& rve, double confining_pa,
                              double max_axial_strain, int rows, double inertial_number) {
-  Require(std::isfinite(confining_pa) && confining_pa > 0, "triaxial.confining_pa",
-          "must be a positive pressure, Pa");
-  Require(std::isfinite(max_axial_strain) && max_axial_strain > 0 && max_axial_strain <= 0.5,
-          "triaxial.max_axial_strain", "must lie in (0, 0.5]");
-  Require(rows >= 2, "triaxial.rows", "must be at least 2");
-  Require(std::isfinite(inertial_number) && inertial_number > 0 && inertial_number <= 0.1,
-          "triaxial.inertial_number", "must lie in (0, 0.1]");
+  RequireLoading(confining_pa, max_axial_strain, 0.5, "0.5", rows, inertial_number, "triaxial");
   dem::rve::Rve specimen = rve.initial();
   specimen.SettleIsotropic(confining_pa);
   TriaxialCurve curve;
@@ -99,63 +127,36 @@ TriaxialCurve RunRveTriaxial(const dem::rve::RveMaterial& rve, double confining_
   const double shear_pa = (c(0, 0) + c(1, 1) + c(2, 2) - c(0, 1) - c(0, 2) - c(1, 2) +
                            3 * (c(3, 3) + c(4, 4) + c(5, 5))) / 15;
   curve.elastic_poisson = (3 * bulk_pa - 2 * shear_pa) / (2 * (3 * bulk_pa + shear_pa));
-  // StableRate1S is the RVE's own cap, linear in its inertial number.
-  const double rate_1_s =
-      specimen.StableRate1S() * inertial_number / specimen.params().max_inertial_number;
+  const double rate_1_s = RateAt1S(specimen, inertial_number);
   dem::rve::MixedControl control;
   control.strain_rate_1_s(2, 2) = -rate_1_s;
   for (int d = 0; d < 2; ++d) {
     control.stress_controlled[d][d] = true;
     control.target_stress_pa(d, d) = -confining_pa;
   }
-  const long total_steps =
-      static_cast<long>(std::ceil(max_axial_strain / (rate_1_s * specimen.time_step_s())));
-  const long steps_per_row = std::max(1L, total_steps / rows);
-  AppendRow(specimen.Snapshot(), &curve);
-  for (long step = 0; step < total_steps;) {
-    const long chunk = std::min(steps_per_row, total_steps - step);
-    specimen.Run(control, static_cast<int>(chunk));
-    step += chunk;
-    AppendRow(specimen.Snapshot(), &curve);
-  }
+  RunInRows(specimen, control, rate_1_s, max_axial_strain, rows,
+            [&] { AppendRow(specimen.Snapshot(), &curve); });
   return curve;
 }
 
 SimpleShearCurve RunRveSimpleShear(const dem::rve::RveMaterial& rve, double normal_pa,
                                    double max_shear_strain, int rows, double inertial_number) {
-  Require(std::isfinite(normal_pa) && normal_pa > 0, "simple_shear.normal_pa",
-          "must be a positive pressure, Pa");
-  Require(std::isfinite(max_shear_strain) && max_shear_strain > 0 && max_shear_strain <= 5,
-          "simple_shear.max_shear_strain", "must lie in (0, 5]");
-  Require(rows >= 2, "simple_shear.rows", "must be at least 2");
-  Require(std::isfinite(inertial_number) && inertial_number > 0 && inertial_number <= 0.1,
-          "simple_shear.inertial_number", "must lie in (0, 0.1]");
+  RequireLoading(normal_pa, max_shear_strain, 5, "5", rows, inertial_number, "simple_shear");
   dem::rve::Rve specimen = rve.initial();
   specimen.SettleIsotropic(normal_pa);
-  const double rate_1_s =
-      specimen.StableRate1S() * inertial_number / specimen.params().max_inertial_number;
+  const double rate_1_s = RateAt1S(specimen, inertial_number);
   dem::rve::MixedControl control;
   control.strain_rate_1_s(0, 2) = rate_1_s;  // u_x = gamma z
   control.stress_controlled[2][2] = true;
   control.target_stress_pa(2, 2) = -normal_pa;
-  const long total_steps =
-      static_cast<long>(std::ceil(max_shear_strain / (rate_1_s * specimen.time_step_s())));
-  const long steps_per_row = std::max(1L, total_steps / rows);
   SimpleShearCurve curve;
   curve.normal_pa = normal_pa;
-  const auto append = [&] {
+  RunInRows(specimen, control, rate_1_s, max_shear_strain, rows, [&] {
     const dem::rve::RveSnapshot snapshot = specimen.Snapshot();
     curve.shear_strain.push_back(2 * snapshot.strain(0, 2));
     curve.shear_stress_pa.push_back(std::abs(snapshot.stress_pa(0, 2)));
     curve.normal_stress_pa.push_back(-snapshot.stress_pa(2, 2));
-  };
-  append();
-  for (long step = 0; step < total_steps;) {
-    const long chunk = std::min(steps_per_row, total_steps - step);
-    specimen.Run(control, static_cast<int>(chunk));
-    step += chunk;
-    append();
-  }
+  });
   return curve;
 }
 

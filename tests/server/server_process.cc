@@ -210,4 +210,15 @@ std::map<std::string, std::string> DownloadAll(v1::MobilityService::Stub& stub,
   return files;
 }
 
+std::set<std::string> MapProductNames() {
+  return {"gonogo.tif", "gonogo.tif.aux.xml", "gonogo.qml", "speed.tif", "speed.qml",
+          "gonogo.kmz", "quicklook.png", "summary.json", "item.json"};
+}
+
+std::set<std::string> NamesOf(const std::map<std::string, std::string>& products) {
+  std::set<std::string> names;
+  for (const auto& [name, bytes] : products) names.insert(name);
+  return names;
+}
+
 }  // namespace gonogo::testing

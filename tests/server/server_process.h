@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -84,5 +85,9 @@ v1::JobStatus WaitForEnd(v1::MobilityService::Stub& stub, const std::string& job
 // Downloads every product into `dir`; returns name -> bytes.
 std::map<std::string, std::string> DownloadAll(v1::MobilityService::Stub& stub,
                                                const std::string& job_id);
+// The names of a map job's products, as DownloadAll returns them.
+std::set<std::string> MapProductNames();
+// The names of DownloadAll's answer.
+std::set<std::string> NamesOf(const std::map<std::string, std::string>& products);
 
 }  // namespace gonogo::testing

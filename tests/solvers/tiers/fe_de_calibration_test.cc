@@ -13,6 +13,7 @@
 #include "solvers/rig/bevameter.h"
 #include "solvers/tiers/fe_de_calibration.h"
 #include "solvers/tiers/fe_de_tier.h"
+#include "tests/solvers/tiers/fe_de_test_configuration.h"
 #include "solvers/tiers/soil_catalogue.h"
 
 namespace gonogo::tiers {
@@ -73,15 +74,6 @@ TEST(FeDeCalibration, TheFitRecoversADruckerPragerSoilFromItsOwnTriaxials) {
                InputError);
 }
 
-FeDeOptions TinyOptions() {  // the ci preset with the procedure cut to 0.45 s
-  FeDeOptions options = FeDeOptions::Preset("ci");
-  options.procedure.gravity_settle_s = 0.05;
-  options.procedure.load_settle_s = 0.1;
-  options.procedure.self_propelled_s = 0.1;
-  options.procedure.speed_ramp_up_s = 0.03;
-  options.procedure.slip_ramp_s = 0.2;
-  return options;
-}
 
 TractionRequest Request(double load_n) {
   TractionRequest request;
@@ -96,7 +88,7 @@ TractionRequest Request(double load_n) {
 
 // The RVE's triaxials (the tier's numerics) fitted, and the fitted soil through the same rig.
 TEST(FeDeCalibration, TheRveFitsADilatantFrictionalSoilWhoseTwinPullsMoreWithSlip) {
-  const FeDeTier tier(TinyOptions());
+  const FeDeTier tier(TinyFeDeOptions());
   const SoilParameters soil = tier.ResolveSoil(Request(1000).soil, "soil");
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(soil, tier.options().numerics, "soil"));
@@ -132,7 +124,7 @@ TEST(FeDeCalibration, TheRveFitsADilatantFrictionalSoilWhoseTwinPullsMoreWithSli
 
 // Drawbar pull rises with slip and sinkage with load (seed 001 Figs. 14-17, Wong 2008 ch. 4).
 TEST(FeDeWheel, PullsMoreWithSlipAndSinksDeeperUnderMoreLoad) {
-  const FeDeTier tier(TinyOptions());
+  const FeDeTier tier(TinyFeDeOptions());
   const TractionCurve light = tier.Compute(Request(600), ComputeContext{});
   const TractionCurve heavy = tier.Compute(Request(1500), ComputeContext{});
   ASSERT_EQ(light.points.size(), 5u) << light.immobile_reason;

@@ -11,6 +11,7 @@
 
 #include "solvers/common/errors.h"
 #include "solvers/tiers/fe_de_tier.h"
+#include "tests/solvers/tiers/fe_de_test_configuration.h"
 
 namespace gonogo::tiers {
 namespace {
@@ -21,16 +22,6 @@ int WorldRank() {
   return rank;
 }
 
-// A configuration small enough for a test: the CI preset with the procedure cut to 0.45 s.
-FeDeOptions TinyOptions() {
-  FeDeOptions options = FeDeOptions::Preset("ci");
-  options.procedure.gravity_settle_s = 0.05;
-  options.procedure.load_settle_s = 0.1;
-  options.procedure.self_propelled_s = 0.1;
-  options.procedure.speed_ramp_up_s = 0.03;
-  options.procedure.slip_ramp_s = 0.2;
-  return options;
-}
 
 TractionRequest Request() {
   TractionRequest request;
@@ -71,7 +62,7 @@ TractionCurve RunOn(const FeDeTier& tier, MPI_Comm communicator, int threads) {
 
 TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   const int rank = WorldRank();
-  FeDeOptions options = TinyOptions();
+  FeDeOptions options = TinyFeDeOptions();
   options.balance.threshold = 0.05;  // migrate on small measured imbalances
   options.balance.min_commits_between = 50;
   const FeDeTier tier(options);
@@ -105,7 +96,7 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
 // wants out at its third check; the whole group stops there, every rank with CancelledError.
 TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
   const int rank = WorldRank();
-  const FeDeTier tier(TinyOptions());
+  const FeDeTier tier(TinyFeDeOptions());
   int checks = 0;
   ComputeContext context;
   context.communicator = MPI_COMM_WORLD;
@@ -133,11 +124,11 @@ TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
 // as the uninterrupted run.
 TEST(FeDeTier, ResumesFromItsCheckpointOnAnotherGroupToTheSameCurve) {
   const int rank = WorldRank();
-  FeDeOptions options = TinyOptions();
+  FeDeOptions options = TinyFeDeOptions();
   options.checkpoint_every_s = 0;  // at every poll (20 FE steps)
   const FeDeTier tier(options);
   if (rank == 0 && reference_curve == nullptr) {
-    reference_curve = new TractionCurve(RunOn(FeDeTier(TinyOptions()), MPI_COMM_NULL, 1));
+    reference_curve = new TractionCurve(RunOn(FeDeTier(TinyFeDeOptions()), MPI_COMM_NULL, 1));
   }
   char path[64] = "/tmp/gonogo_fe_de_resume_XXXXXX";
   if (rank == 0) {
@@ -172,7 +163,7 @@ TEST(FeDeTier, ResumesFromItsCheckpointOnAnotherGroupToTheSameCurve) {
     ComputeContext second;
     second.communicator = pair;
     second.checkpoint_dir = path;
-    FeDeOptions no_more = TinyOptions();
+    FeDeOptions no_more = TinyFeDeOptions();
     no_more.checkpoint_every_s = 1e9;
     const auto start = std::chrono::steady_clock::now();
     const TractionCurve resumed = FeDeTier(no_more).Compute(Request(), second);
