@@ -17,10 +17,6 @@ using material::ConstitutiveModel;
 using material::MaterialState;
 using material::Matrix3;
 using material::PointHandle;
-using material::PointIncrement;
-using material::PointResponse;
-using material::TrialResponse;
-using material::UpdateStatus;
 namespace checkpoint = material::checkpoint;
 using namespace wire;
 
