@@ -13,7 +13,9 @@
 namespace gonogo::geo {
 namespace {
 
+using internal::CapHeightPx;
 using internal::Rgba;
+using internal::TextWidthPx;
 
 const char kField[] = "plot";
 
@@ -70,20 +72,6 @@ void FillRect(cairo_t* cr, int x, int y, int w, int h, Rgba c) {
   cairo_fill(cr);
 }
 
-// Advance width of `text` in pixels at the current font.
-double TextWidthPx(cairo_t* cr, const std::string& text) {
-  cairo_text_extents_t extents;
-  cairo_text_extents(cr, text.c_str(), &extents);
-  return extents.x_advance;
-}
-
-// Height of a capital (or digit) above the baseline at the current font: text is placed by its
-// capitals, so labels with and without descenders line up.
-double CapHeightPx(cairo_t* cr) {
-  cairo_text_extents_t extents;
-  cairo_text_extents(cr, "H", &extents);
-  return extents.height;
-}
 
 // Draws `text` in kTextColour with the left end of its baseline at (x, baseline).
 void DrawText(cairo_t* cr, double x, double baseline, const std::string& text) {

@@ -61,18 +61,6 @@ void FillRect(cairo_t* cr, int x, int y, int w, int h, Rgba c) {
   cairo_fill(cr);
 }
 
-double TextWidthPx(cairo_t* cr, const std::string& text) {
-  cairo_text_extents_t extents;
-  cairo_text_extents(cr, text.c_str(), &extents);
-  return extents.x_advance;
-}
-
-// Height of a capital above the baseline at the current font: text is placed by its capitals.
-double CapHeightPx(cairo_t* cr) {
-  cairo_text_extents_t extents;
-  cairo_text_extents(cr, "H", &extents);
-  return -extents.y_bearing;
-}
 
 // Size of the map for a width x height grid (see QuicklookLayout).
 void MapSizePx(int width, int height, int* map_w, int* map_h) {
@@ -290,6 +278,18 @@ void WritePng(cairo_surface_t* surface, const std::string& path) {
 }
 
 }  // namespace
+
+double TextWidthPx(cairo_t* cr, const std::string& text) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, text.c_str(), &extents);
+  return extents.x_advance;
+}
+
+double CapHeightPx(cairo_t* cr) {
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, "H", &extents);
+  return -extents.y_bearing;
+}
 
 Rgba ClassColour(uint8_t go_class) {
   switch (go_class) {

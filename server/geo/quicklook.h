@@ -40,6 +40,11 @@ CairoContext NewContext(cairo_surface_t* surface);
 // fontconfig) with greyscale antialiasing; `size_px` is the em size in pixels.
 inline constexpr char kFontFamily[] = "DejaVu Sans";
 void SelectFont(cairo_t* cr, double size_px, bool bold = false);
+// Advance width of `text` in pixels at the current font.
+double TextWidthPx(cairo_t* cr, const std::string& text);
+// Height of a capital above the baseline at the current font: text is placed by its capitals, so
+// labels with and without descenders line up.
+double CapHeightPx(cairo_t* cr);
 
 // Layout of the quicklook in pixels, from the top-left corner of the image:
 //
