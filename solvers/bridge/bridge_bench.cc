@@ -177,7 +177,7 @@ Row RunConfiguration(const Options& options, const dem::rve::RveMaterial& materi
   bridge::BalanceOptions balance;
   balance.enabled = balance_on;
   balance.threshold = options.balance_threshold;
-  balance.min_commits_between = options.balance_every;
+  balance.cost_window_commits = options.balance_every;
   balance.rank_zero_owns_points = !options.dedicated_fe;
   balance.rank_zero_threads = options.threads;
 
@@ -401,7 +401,7 @@ int main(int argc, char** argv) {
       ->check(gonogo::cli_checks::FiniteNumber(0))
       ->capture_default_str();
   app.add_option("--balance-every", options.balance_every,
-                 "BalanceOptions::min_commits_between (also where imb_before ends)")
+                 "BalanceOptions::cost_window_commits (also where imb_before ends)")
       ->check(at_least_one)
       ->capture_default_str();
   app.add_option("--threads", options.threads, "OpenMP threads per rank over its points")

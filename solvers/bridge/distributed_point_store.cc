@@ -72,7 +72,7 @@ void RankGroupLink::Finish() {
 void BalanceOptions::Validate(const std::string& field_prefix) const {
   Require(std::isfinite(threshold) && threshold >= 0, field_prefix + "threshold",
           "must be a finite fraction >= 0");
-  Require(min_commits_between >= 1, field_prefix + "min_commits_between", "must be at least 1");
+  Require(cost_window_commits >= 1, field_prefix + "cost_window_commits", "must be at least 1");
   Require(rank_zero_threads >= 1, field_prefix + "rank_zero_threads", "must be at least 1");
 }
 
@@ -160,6 +160,7 @@ std::vector<PointHandle> DistributedPointStore::Create(std::int64_t count) {
     owner_.push_back(owner);
     has_trial_.push_back(0);
     cost_seconds_.push_back(0);
+    window_seconds_.emplace_back();
     local_committed_.push_back(owner == 0 ? model_.InitialState() : nullptr);
     local_trial_.emplace_back();
     per_rank[owner].push_back(handle);
@@ -212,7 +213,7 @@ std::vector<TrialResponse> DistributedPointStore::TryUpdate(
       const std::size_t k = positions[0][i];
       const PointHandle handle = handles[k];
       trials[k] = std::move(results[i].trial);
-      cost_seconds_[handle] = results[i].seconds;
+      window_seconds_[handle].push_back(results[i].seconds);
       balance.rank_seconds[0] += results[i].seconds;
       local_trial_[handle] = std::move(results[i].state);
     }
@@ -228,7 +229,7 @@ std::vector<TrialResponse> DistributedPointStore::TryUpdate(
       for (std::size_t k : positions[r]) {
         double seconds = 0;
         GetTrial(in, trials[k], seconds);
-        cost_seconds_[handles[k]] = seconds;
+        window_seconds_[handles[k]].push_back(seconds);
         balance.rank_seconds[r] += seconds;
       }
     } catch (const std::exception& e) {
@@ -274,10 +275,25 @@ void DistributedPointStore::Commit(const std::vector<PointHandle>& handles) {
     }
   }
   SendHandlesTo(*group_, Command::kCommit, id_, per_rank);
-  ++commits_since_rebalance_;
-  if (balance_.enabled && commits_since_rebalance_ >= balance_.min_commits_between &&
-      !history_->empty() && history_->back().imbalance > balance_.threshold) {
-    Rebalance();
+  if (++commits_in_window_ >= balance_.cost_window_commits) {
+    CloseCostWindow();
+    if (balance_.enabled && !history_->empty()) Rebalance();
+  }
+}
+
+void DistributedPointStore::CloseCostWindow() {
+  commits_in_window_ = 0;
+  for (std::size_t p = 0; p < window_seconds_.size(); ++p) {
+    std::vector<double>& samples = window_seconds_[p];
+    if (samples.empty()) continue;  // not updated in this window: keep its last cost
+    const std::size_t middle = samples.size() / 2;
+    std::nth_element(samples.begin(), samples.begin() + middle, samples.end());
+    double median = samples[middle];
+    if (samples.size() % 2 == 0) {
+      median = 0.5 * (median + *std::max_element(samples.begin(), samples.begin() + middle));
+    }
+    cost_seconds_[p] = median;
+    samples.clear();
   }
 }
 
@@ -332,7 +348,6 @@ void DistributedPointStore::Restore(PointHandle handle, const std::string& bytes
 }
 
 void DistributedPointStore::Rebalance() {
-  commits_since_rebalance_ = 0;
   const std::vector<int> owning = OwningRanks();
   std::vector<double> load(group_->size(), 0.0);
   for (std::size_t p = 0; p < owner_.size(); ++p) load[owner_[p]] += cost_seconds_[p];
@@ -345,6 +360,7 @@ void DistributedPointStore::Rebalance() {
     for (int r : owning) max_load = std::max(max_load, load[r]);
     return max_load / mean - 1;
   };
+  if (imbalance() <= balance_.threshold) return;
   // Greedy moves from the most to the least loaded rank.
   std::vector<std::tuple<PointHandle, int, int>> moves;
   std::vector<int> new_owner = owner_;

@@ -89,7 +89,10 @@ void ServeRankGroup(MPI_Comm communicator, const material::ConstitutiveModel& mo
 struct BalanceOptions {
   bool enabled = true;
   double threshold = 0.25;        // max / mean - 1 of rank seconds that triggers a rebalance
-  int min_commits_between = 10;   // steps to wait after a rebalance, so costs are measured anew
+  // Commits per cost window: a point's cost is the median of its update seconds over the window
+  // (one step's wall seconds are at the mercy of time slicing), and a rebalance is considered at
+  // the end of each window, on those costs.
+  int cost_window_commits = 10;
   bool rank_zero_owns_points = true;  // false: the FE rank keeps no points (a dedicated FE rank)
   int rank_zero_threads = 1;          // OpenMP threads over rank 0's own points
   void Validate(const std::string& field_prefix) const;
@@ -148,6 +151,7 @@ class DistributedPointStore : public material::MaterialPointStore {
   void ReadCheckpoint(const std::string& directory, std::uint64_t generation) override;
 
  private:
+  void CloseCostWindow();
   void Rebalance();
   std::vector<int> OwningRanks() const;
 
@@ -158,13 +162,14 @@ class DistributedPointStore : public material::MaterialPointStore {
   int next_owner_ = 0;  // index into OwningRanks() of the next created point
   std::vector<int> owner_;                       // (points) group rank
   std::vector<char> has_trial_;                  // (points) a successful trial waits for commit
-  std::vector<double> cost_seconds_;             // (points) of the last update
+  std::vector<double> cost_seconds_;             // (points) median over the last cost window
+  std::vector<std::vector<double>> window_seconds_;  // (points) update seconds in this window
   // Rank 0's own points: committed and trial states.
   std::vector<std::unique_ptr<material::MaterialState>> local_committed_;  // (points) null if remote
   std::vector<std::unique_ptr<material::MaterialState>> local_trial_;
   std::shared_ptr<std::vector<StepBalance>> history_ =
       std::make_shared<std::vector<StepBalance>>();
-  int commits_since_rebalance_ = 0;
+  int commits_in_window_ = 0;
   std::shared_ptr<DistributedPointStore*> registration_;
 };
 

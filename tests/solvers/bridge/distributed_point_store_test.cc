@@ -166,7 +166,7 @@ TEST(DistributedPointStore, MatchesTheLocalStoreBitForBitThroughMigrations) {
   OnGroup(*model, [&](std::shared_ptr<RankGroupLink> link) {
     BalanceOptions balance;
     balance.threshold = 0;  // any measured imbalance moves points: migrations nearly every step
-    balance.min_commits_between = 1;
+    balance.cost_window_commits = 1;
     DistributedPointStore distributed(link, *model, balance);
     LocalPointStore local(*model);
     DriveSideBySide(local, distributed, 31, 40, 2e-4, 7);
@@ -198,7 +198,7 @@ TEST(DistributedPointStore, RveStatesMoveBetweenRanksBitIdentically) {
   OnGroup(model, [&](std::shared_ptr<RankGroupLink> link) {
     BalanceOptions balance;
     balance.threshold = 0;
-    balance.min_commits_between = 1;
+    balance.cost_window_commits = 1;
     DistributedPointStore distributed(link, model, balance);
     LocalPointStore local(model);
     DriveSideBySide(local, distributed, 5, 6, 2e-4, 11);
@@ -213,7 +213,7 @@ TEST(DistributedPointStore, MovesPointsOffTheRankThatMeasuresSlowest) {
   OnGroup(model, [&](std::shared_ptr<RankGroupLink> link) {
     BalanceOptions balance;
     balance.threshold = 0.3;
-    balance.min_commits_between = 1;
+    balance.cost_window_commits = 1;
     DistributedPointStore store(link, model, balance);
     const int points = 12;
     const std::vector<PointHandle> handles = store.Create(points);
@@ -241,6 +241,48 @@ TEST(DistributedPointStore, MovesPointsOffTheRankThatMeasuresSlowest) {
         << history[2].rank_seconds[1] << " " << history[2].rank_seconds[2];
     EXPECT_GT(history[0].bytes_sent, 0);
     EXPECT_GT(history[0].bytes_received, 0);
+  });
+}
+
+// What time slicing does to one step (a rank descheduled mid-step measures a slow step) must not
+// move points; a cost that lasts the whole window must.
+TEST(DistributedPointStore, OneSlowStepMovesNothingAWindowOfSlowStepsDoes) {
+  const CostlyElastic model;
+  OnGroup(model, [&](std::shared_ptr<RankGroupLink> link) {
+    BalanceOptions balance;
+    // Cheap points cost 4 ms and slow ones 50 ms, so that a timeslice lost on an oversubscribed
+    // machine (a few ms) cannot double a rank's load, and the threshold of 1 sits between what
+    // such losses can do and the slow rank's imbalance (200 against 16 + 16 ms: 1.6).
+    balance.threshold = 1.0;
+    balance.cost_window_commits = 5;
+    DistributedPointStore store(link, model, balance);
+    const std::vector<PointHandle> handles = store.Create(12);
+    auto increments_with_rank_one = [&](double rank_one_size) {
+      std::vector<Matrix3> increments;
+      for (PointHandle h : handles) {
+        increments.push_back(Matrix3::Identity() *
+                             (store.Owner(h) == 1 ? rank_one_size : 0.02));
+      }
+      return increments;
+    };
+    // Commits 1-10 are two windows; commit 7 alone is slow on rank 1.
+    for (int commit = 1; commit <= 10; ++commit) {
+      store.TryUpdate(handles, increments_with_rank_one(commit == 7 ? 0.25 : 0.02), false);
+      store.Commit(handles);
+    }
+    const std::vector<StepBalance>& history = store.balance_history();
+    ASSERT_EQ(history.size(), 10u);
+    EXPECT_GT(history[6].imbalance, 1.0) << "the slow step is measured as one";
+    for (const StepBalance& step : history) EXPECT_EQ(step.points_moved, 0) << step.step;
+    // Commits 11-15: rank 1 slow throughout; the window's end moves points off it.
+    for (int commit = 11; commit <= 15; ++commit) {
+      store.TryUpdate(handles, increments_with_rank_one(0.25), false);
+      store.Commit(handles);
+    }
+    ASSERT_EQ(history.size(), 15u);
+    for (int k = 10; k < 14; ++k) EXPECT_EQ(history[k].points_moved, 0) << k;
+    EXPECT_GT(history[14].points_moved, 0);
+    EXPECT_LT(history[14].imbalance_after, history[14].imbalance);
   });
 }
 

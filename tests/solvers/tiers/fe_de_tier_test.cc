@@ -45,26 +45,29 @@ bool SameBits(const TractionCurve& a, const TractionCurve& b) {
   return true;
 }
 
-// Runs the tier on `communicator` (MPI_COMM_NULL: alone) on the ranks that belong to it.
-TractionCurve RunOn(const FeDeTier& tier, MPI_Comm communicator, int threads) {
+// Runs the tier on `communicator` (MPI_COMM_NULL: alone) on the ranks that belong to it;
+// `points_moved` (if given) receives the RVEs migrated during the run (group rank 0's count).
+TractionCurve RunOn(const FeDeTier& tier, MPI_Comm communicator, int threads,
+                    int* points_moved = nullptr) {
   ComputeContext context;
   context.communicator = communicator;
   context.threads = threads;
   const auto start = std::chrono::steady_clock::now();
-  TractionCurve curve = tier.Compute(Request(), context);
+  const FeDeRunReport report = tier.Run(Request(), context);
+  if (points_moved != nullptr) *points_moved = report.PointsMoved();
   if (WorldRank() == 0) {
     std::cout << "  fe-de curve in "
               << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
-              << " s\n";
+              << " s, " << report.PointsMoved() << " RVEs migrated\n";
   }
-  return curve;
+  return report.curve;
 }
 
 TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   const int rank = WorldRank();
   FeDeOptions options = TinyFeDeOptions();
   options.balance.threshold = 0.05;  // migrate on small measured imbalances
-  options.balance.min_commits_between = 50;
+  options.balance.cost_window_commits = 50;
   const FeDeTier tier(options);
 
   TractionCurve alone;
@@ -74,14 +77,17 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   MPI_Comm pair = MPI_COMM_NULL;
   MPI_Comm_split(MPI_COMM_WORLD, rank < 2 ? 0 : MPI_UNDEFINED, rank, &pair);
   TractionCurve on_two;
+  int moved_on_two = 0, moved_on_three = 0;
   if (pair != MPI_COMM_NULL) {
-    on_two = RunOn(tier, pair, rank == 1 ? 2 : 1);
+    on_two = RunOn(tier, pair, rank == 1 ? 2 : 1, &moved_on_two);
     MPI_Comm_free(&pair);
   }
   MPI_Barrier(MPI_COMM_WORLD);
 
-  const TractionCurve on_three = RunOn(tier, MPI_COMM_WORLD, 1);
+  const TractionCurve on_three = RunOn(tier, MPI_COMM_WORLD, 1, &moved_on_three);
   if (rank != 0) return;
+  // The group runs must cross migrations for the comparison to cover them.
+  EXPECT_GT(moved_on_two + moved_on_three, 0);
   ASSERT_EQ(alone.points.size(), 5u) << alone.immobile_reason;
   reference_curve = new TractionCurve(alone);
   EXPECT_TRUE(SameBits(on_two, alone));
