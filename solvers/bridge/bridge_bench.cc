@@ -401,7 +401,7 @@ int main(int argc, char** argv) {
       ->check(gonogo::cli_checks::FiniteNumber(0))
       ->capture_default_str();
   app.add_option("--balance-every", options.balance_every,
-                 "BalanceOptions::cost_window_commits (also where imb_before ends)")
+                 "BalanceOptions::cost_window_commits: commits per cost window (also where imb_before ends)")
       ->check(at_least_one)
       ->capture_default_str();
   app.add_option("--threads", options.threads, "OpenMP threads per rank over its points")

@@ -160,6 +160,27 @@ SimpleShearCurve RunRveSimpleShear(const dem::rve::RveMaterial& rve, double norm
   return curve;
 }
 
+double HorizontalPlaneFrictionAngleDeg(double friction_angle_deg, double dilation_angle_deg) {
+  if (!(friction_angle_deg > 0 && friction_angle_deg < 90)) {
+    throw InputError("friction_angle_deg", "must be in (0, 90) deg");
+  }
+  if (!(dilation_angle_deg >= 0 && dilation_angle_deg <= friction_angle_deg)) {
+    throw InputError("dilation_angle_deg", "must be in [0, friction_angle_deg]");
+  }
+  const double sin_phi = std::sin(units::DegreesToRadians(friction_angle_deg));
+  const double psi = units::DegreesToRadians(dilation_angle_deg);
+  // Davis (1968): tau / sigma_n = sin(phi) cos(psi) / (1 - sin(phi) sin(psi)).
+  return units::RadiansToDegrees(
+      std::atan(sin_phi * std::cos(psi) / (1 - sin_phi * std::sin(psi))));
+}
+
+double MobilisedFrictionAngleDeg(const TriaxialCurve& curve, std::size_t row) {
+  const double sigma_3 =
+      curve.lateral_stress_pa.empty() ? curve.confining_pa : curve.lateral_stress_pa.at(row);
+  const double sigma_1 = sigma_3 + curve.deviator_pa.at(row);
+  return units::RadiansToDegrees(std::asin((sigma_1 - sigma_3) / (sigma_1 + sigma_3)));
+}
+
 TriaxialFit FitDruckerPragerToTriaxials(const std::vector<TriaxialCurve>& curves,
                                         double dilatancy_window) {
   Require(curves.size() >= 2, "triaxial", "needs curves at two confinements at least");

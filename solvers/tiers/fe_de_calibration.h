@@ -68,6 +68,18 @@ SimpleShearCurve RunRveSimpleShear(const dem::rve::RveMaterial& rve, double norm
                                    double max_shear_strain, int rows,
                                    double inertial_number = 2e-4);
 
+// The friction angle a shear ring (or direct or simple shear) measures on its horizontal plane,
+// atan(tau / sigma_n), of a soil with Mohr-Coulomb friction angle phi flowing with dilation angle
+// psi: Davis (1968), for coaxial plastic flow with no strain along the plane,
+//   tau / sigma_n = sin(phi) cos(psi) / (1 - sin(phi) sin(psi)),
+// so tan(phi) for associated flow (psi = phi) and sin(phi) at constant volume (psi = 0, the
+// critical state). Degrees in, degrees out; psi within [0, phi].
+double HorizontalPlaneFrictionAngleDeg(double friction_angle_deg, double dilation_angle_deg);
+
+// What a triaxial curve mobilises, compression positive: the friction angle
+// asin((sigma_1 - sigma_3) / (sigma_1 + sigma_3)) with sigma_3 the measured lateral stress.
+double MobilisedFrictionAngleDeg(const TriaxialCurve& curve, std::size_t row);
+
 struct TriaxialCurveFit {
   double peak_deviator_pa = 0;
   double lateral_stress_at_peak_pa = 0;

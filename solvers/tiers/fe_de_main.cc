@@ -9,6 +9,9 @@
 //                (RVE triaxials, the Drucker-Prager fit and its twin curve beside fe-de's)
 //   gonogo-fe-de --bevameter --soil seed000_sand_rve100 --preset ci [--element-size 0.05]
 //                [--ring-pressures 10e3,20e3,40e3] (the virtual bevameter on the same soil)
+//   gonogo-fe-de --element-tests --soil seed000_sand [--triaxial-pressures 5e3,40e3]
+//                [--ring-pressures 10e3,40e3] (the RVE alone: triaxials, simple shears, and
+//                what a shear ring should read of them)
 //
 // Prints the curve (or the bevameter's curves and fit) as CSV (the columns of `gonogo curve --csv`) on stdout and the run's figures
 // (mesh, FE steps, ranks, wall time, load imbalance, migrations, bytes per step) on stderr; with
@@ -24,6 +27,7 @@
 #include <exception>
 #include <fstream>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -55,6 +59,8 @@ struct CommandLine {
   bool bevameter = false;
   bool twin = false;
   bool calibrate = false;
+  bool element_tests = false;
+  double shear_strain = 1.0;
   std::vector<double> triaxial_pressures_pa = {5e3, 15e3, 40e3};
   double triaxial_strain = 0.1;
   double element_size_m = 0;
@@ -144,6 +150,92 @@ material::DruckerPragerParams FitTwin(const CommandLine& line, const tiers::FeDe
               dp.dilation_angle_deg);
   std::fflush(stdout);
   return dp;
+}
+
+// Mean of values[from, end).
+double MeanFrom(const std::vector<double>& values, std::size_t from) {
+  double sum = 0;
+  for (std::size_t k = from; k < values.size(); ++k) sum += values[k];
+  return sum / static_cast<double>(values.size() - from);
+}
+
+// The RVE alone (rank 0): drained triaxials and simple shears, the friction angles each mobilises
+// at its peak and over the last fifth of the test, and what Davis's relation
+// (HorizontalPlaneFrictionAngleDeg) makes of the triaxials' for a shear ring's horizontal plane.
+int RunElementTests(const CommandLine& line, int rank) {
+  if (rank != 0) return 0;
+  // Checked before any test runs: the fit needs two confinements (the peaks' envelope).
+  const std::set<double> confinements(line.triaxial_pressures_pa.begin(),
+                                      line.triaxial_pressures_pa.end());
+  if (confinements.size() < 2) {
+    throw InputError("--triaxial-pressures", "needs two different confining pressures at least");
+  }
+  const tiers::FeDeTier tier(OptionsOf(line));
+  const SoilParameters soil = SoilOf(line);
+  const auto rve = dem::rve::SharedRveMaterial(
+      dem::rve::RveMaterialParamsFromSoil(soil, tier.options().numerics, "soil.parameters"));
+  const int rows = 200, tail = rows / 5;
+  std::vector<tiers::TriaxialCurve> curves;
+  for (double pressure : line.triaxial_pressures_pa) {
+    std::fprintf(stderr, "triaxial at %.0f Pa\n", pressure);
+    curves.push_back(tiers::RunRveTriaxial(*rve, pressure, line.triaxial_strain, rows));
+  }
+  const tiers::TriaxialFit fit = tiers::FitDruckerPragerToTriaxials(curves);
+  std::printf("# RVE drained triaxials to axial strain %.3g (compression positive; end: the last "
+              "fifth of the test)\n",
+              line.triaxial_strain);
+  std::printf("sigma3_pa,peak_friction_deg,axial_strain_at_peak,psi_at_peak_deg,"
+              "end_friction_deg,end_dilatancy,ring_peak_deg_davis,ring_end_deg_davis\n");
+  for (std::size_t k = 0; k < curves.size(); ++k) {
+    const tiers::TriaxialCurve& curve = curves[k];
+    const tiers::TriaxialCurveFit& at_peak = fit.curves[k];
+    const std::size_t peak = static_cast<std::size_t>(
+        std::max_element(curve.deviator_pa.begin(), curve.deviator_pa.end()) -
+        curve.deviator_pa.begin());
+    const double peak_phi = tiers::MobilisedFrictionAngleDeg(curve, peak);
+    double end_phi = 0;
+    const std::size_t from = curve.deviator_pa.size() - tail;
+    for (std::size_t r = from; r < curve.deviator_pa.size(); ++r) {
+      end_phi += tiers::MobilisedFrictionAngleDeg(curve, r) / tail;
+    }
+    const std::size_t last = curve.axial_strain.size() - 1;
+    const double end_dilatancy =
+        (curve.volumetric_strain[last] - curve.volumetric_strain[from]) /
+        (curve.axial_strain[last] - curve.axial_strain[from]);
+    std::printf("%.0f,%.2f,%.4f,%.2f,%.2f,%.3f,%.2f,%.2f\n", curve.confining_pa, peak_phi,
+                at_peak.axial_strain_at_peak, at_peak.dilation_angle_deg, end_phi, end_dilatancy,
+                tiers::HorizontalPlaneFrictionAngleDeg(
+                    peak_phi, std::min(at_peak.dilation_angle_deg, peak_phi)),
+                tiers::HorizontalPlaneFrictionAngleDeg(end_phi, 0));
+  }
+  const material::DruckerPragerParams& dp = fit.strength;
+  std::printf("# envelope of the peaks: c %.1f Pa, phi %.2f deg, psi %.2f deg; Davis: a ring "
+              "peaks at %.2f deg\n",
+              dp.cohesion_pa, dp.friction_angle_deg, dp.dilation_angle_deg,
+              tiers::HorizontalPlaneFrictionAngleDeg(dp.friction_angle_deg,
+                                                     dp.dilation_angle_deg));
+  std::printf("# RVE simple shear to gamma %.3g, sigma_zz held (friction angle: atan(tau / "
+              "sigma_zz))\n",
+              line.shear_strain);
+  std::printf("normal_pa,peak_tau_pa,peak_friction_deg,gamma_at_peak,end_tau_pa,"
+              "end_friction_deg\n");
+  for (double pressure : line.bevameter_spec.ring_normal_pressures_pa) {
+    std::fprintf(stderr, "simple shear at %.0f Pa\n", pressure);
+    const tiers::SimpleShearCurve shear =
+        tiers::RunRveSimpleShear(*rve, pressure, line.shear_strain, rows);
+    const std::size_t peak = static_cast<std::size_t>(
+        std::max_element(shear.shear_stress_pa.begin(), shear.shear_stress_pa.end()) -
+        shear.shear_stress_pa.begin());
+    const std::size_t from = shear.shear_stress_pa.size() - tail;
+    const double end_tau = MeanFrom(shear.shear_stress_pa, from);
+    const double end_normal = MeanFrom(shear.normal_stress_pa, from);
+    std::printf("%.0f,%.1f,%.2f,%.3f,%.1f,%.2f\n", pressure, shear.shear_stress_pa[peak],
+                units::RadiansToDegrees(
+                    std::atan(shear.shear_stress_pa[peak] / shear.normal_stress_pa[peak])),
+                shear.shear_strain[peak], end_tau,
+                units::RadiansToDegrees(std::atan(end_tau / end_normal)));
+  }
+  return 0;
 }
 
 int RunBevameter(const CommandLine& line, int rank) {
@@ -273,6 +365,7 @@ int MeasurePace(const CommandLine& line, const tiers::FeDeTier& tier,
 int Run(const CommandLine& line, int rank) {
   if (line.bevameter) return RunBevameter(line, rank);
   if (line.calibrate) return RunCalibration(line, rank);
+  if (line.element_tests) return RunElementTests(line, rank);
   const tiers::FeDeTier tier(OptionsOf(line));
   const TractionRequest request = RequestOf(line);
   const SoilParameters& soil = *request.soil.parameters;
@@ -331,6 +424,14 @@ int main(int argc, char** argv) {
   app.add_flag("--calibrate", line.calibrate,
                "the calibration chain: RVE triaxials, a Drucker-Prager fit, and its continuum "
                "twin's curve beside the fe-de curve");
+  app.add_flag("--element-tests", line.element_tests,
+               "the RVE alone: drained triaxials at --triaxial-pressures and simple shears at "
+               "--ring-pressures, their friction angles, and what a shear ring should measure "
+               "(Davis's relation)");
+  app.add_option("--shear-strain", line.shear_strain,
+                 "element tests: shear strain the simple shears reach")
+      ->check(finite)
+      ->capture_default_str();
   app.add_option("--triaxial-pressures", line.triaxial_pressures_pa,
                  "calibration: confining pressures of the RVE triaxials, Pa")
       ->delimiter(',')

@@ -74,6 +74,33 @@ TEST(FeDeCalibration, TheFitRecoversADruckerPragerSoilFromItsOwnTriaxials) {
                InputError);
 }
 
+// Davis (1968) in its two limits, and in between: associated flow measures tan(phi) on the
+// horizontal plane, flow at constant volume sin(phi) (the critical state); dilation raises it.
+TEST(FeDeCalibration, TheRingsHorizontalPlaneFrictionFollowsDavis) {
+  for (double phi : {20.0, 35.0, 54.3}) {
+    const double phi_rad = units::DegreesToRadians(phi);
+    EXPECT_NEAR(HorizontalPlaneFrictionAngleDeg(phi, phi), phi, 1e-9);
+    EXPECT_NEAR(HorizontalPlaneFrictionAngleDeg(phi, 0),
+                units::RadiansToDegrees(std::atan(std::sin(phi_rad))), 1e-9);
+    EXPECT_LT(HorizontalPlaneFrictionAngleDeg(phi, 0), HorizontalPlaneFrictionAngleDeg(phi, 5));
+  }
+  // The fe-de soil's fit (phi 54.3, psi 13.5 deg) on a ring: 44.2 deg, by hand.
+  EXPECT_NEAR(HorizontalPlaneFrictionAngleDeg(54.3, 13.5), 44.26, 0.01);
+  EXPECT_THROW(HorizontalPlaneFrictionAngleDeg(30, 31), InputError);
+  EXPECT_THROW(HorizontalPlaneFrictionAngleDeg(90, 0), InputError);
+  EXPECT_THROW(HorizontalPlaneFrictionAngleDeg(30, -1), InputError);
+}
+
+// A triaxial curve's mobilised friction angle reads its measured lateral stress.
+TEST(FeDeCalibration, TheMobilisedFrictionAngleReadsTheMeasuredLateralStress) {
+  TriaxialCurve curve;
+  curve.confining_pa = 10e3;
+  curve.deviator_pa = {20e3};
+  EXPECT_NEAR(MobilisedFrictionAngleDeg(curve, 0), 30.0, 1e-9);  // sigma_1 = 3 sigma_3
+  curve.lateral_stress_pa = {15e3};
+  EXPECT_NEAR(MobilisedFrictionAngleDeg(curve, 0),
+              units::RadiansToDegrees(std::asin(20.0 / 50.0)), 1e-9);
+}
 
 TractionRequest Request(double load_n) {
   TractionRequest request;
