@@ -1,0 +1,52 @@
+// A material point's history along a strain path: what a surrogate of the point learns from
+// (issue "FE-ANN tier", training data). Per step the displacement-gradient increment dH applied,
+// the Cauchy stress after it and, optionally, internal variables of the state (void ratio,
+// coordination ...), with the stress the path started from.
+//
+// Stored compactly (SerializeHistory: a tagged little-endian float64 block, 8 + 16 + 8 (9 + 6 + V)
+// bytes per step) and exported as NumPy .npy or CSV for training elsewhere: one row per step,
+// columns history, step, dH_xx dH_xy dH_xz dH_yx dH_yy dH_yz dH_zx dH_zy dH_zz (row-major),
+// sigma_xx sigma_yy sigma_zz sigma_yz sigma_xz sigma_xy (Pa, tension positive), then the
+// internal variables by name.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "solvers/material/constitutive.h"
+#include "solvers/material/kinematics.h"
+
+namespace gonogo::ann {
+
+using material::Matrix3;
+using material::Vector6;
+
+struct StrainHistory {
+  Matrix3 initial_stress_pa = Matrix3::Zero();
+  std::vector<std::string> internal_variable_names;
+  std::vector<Matrix3> increments;                   // dH per step
+  std::vector<Vector6> stresses_pa;                  // Voigt, after each step
+  std::vector<std::vector<double>> internal_variables;  // per step, by name (may be empty)
+  // Why the path ended before its last step (a model failure); empty when it ran to the end.
+  std::string stopped_reason;
+
+  std::size_t steps() const { return increments.size(); }
+};
+
+// Compact bytes ("GNGHIS01" tag); ParseHistory throws InputError("history", ...) for a truncated,
+// foreign or inconsistent buffer.
+std::string SerializeHistory(const StrainHistory& history);
+StrainHistory ParseHistory(const std::string& bytes);
+
+// The export's column names (see above), for histories with these internal variables.
+std::vector<std::string> HistoryColumns(const std::vector<std::string>& internal_variable_names);
+
+// Every step of every history as one float64 table. All histories must carry the same internal
+// variables (InputError("histories", ...) otherwise). The .npy is format 1.0, little-endian
+// '<f8', C order, shape (rows, columns); its column names go in a `.columns.txt` beside it (the
+// .npy format has no place for them). Throws std::runtime_error when a file cannot be written.
+void WriteHistoriesNpy(const std::string& path, const std::vector<StrainHistory>& histories);
+void WriteHistoriesCsv(const std::string& path, const std::vector<StrainHistory>& histories);
+
+}  // namespace gonogo::ann
