@@ -14,6 +14,9 @@ packages=(
   libsqlite3-dev sqlite3 libgdal-dev gdal-bin python3-gdal nlohmann-json3-dev
   # command-line parsing for every program; structured logging in the server
   libcli11-dev libspdlog-dev
+  # neural networks of the fe-ann tier (the PyTorch 1.13 C++ API), and Python's torch that loads
+  # its saved models
+  libtorch-dev python3-torch
   # drawing the PNG plots and quicklooks (server/geo), and their font
   libcairo2-dev fonts-dejavu-core
   # tests; the products opened in QGIS (offscreen) and the STAC item checked against its schema

@@ -1,0 +1,312 @@
+// The only translation unit that includes libtorch (a <torch/torch.h> unit compiles for about
+// 30 s here; PLATFORM-NOTES).
+#include "solvers/ann/stress_surrogate.h"
+
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::ann {
+namespace {
+
+constexpr int kInputs = 18;
+constexpr int kOutputs = 6;
+
+torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs) {
+  torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), kInputs},
+                                 torch::kFloat64);
+  double* data = x.data_ptr<double>();
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    for (int c = 0; c < 6; ++c) {
+      data[n * kInputs + c] = inputs[n].strain_increment[c];
+      data[n * kInputs + 6 + c] = inputs[n].stress_pa[c];
+      data[n * kInputs + 12 + c] = inputs[n].accumulated_strain[c];
+    }
+  }
+  return x;
+}
+
+// Column means and standard deviations; a constant column gets scale 1 (it carries nothing).
+std::pair<torch::Tensor, torch::Tensor> Standardisation(const torch::Tensor& values) {
+  torch::Tensor mean = values.mean(0);
+  torch::Tensor scale = values.std(0, /*unbiased=*/false);
+  scale = torch::where(scale > 1e-12 * (mean.abs() + 1e-300), scale, torch::ones_like(scale));
+  return {mean, scale};
+}
+
+// The TorchScript module: standardise, the tanh layers, the linear output, back to Pa.
+torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
+                                const std::vector<torch::Tensor>& biases, const torch::Tensor& in_mean,
+                                const torch::Tensor& in_scale, const torch::Tensor& out_mean,
+                                const torch::Tensor& out_scale, const std::string& architecture) {
+  torch::jit::Module module("StressSurrogate");
+  module.register_buffer("in_mean", in_mean.detach().clone());
+  module.register_buffer("in_scale", in_scale.detach().clone());
+  module.register_buffer("out_mean", out_mean.detach().clone());
+  module.register_buffer("out_scale", out_scale.detach().clone());
+  module.register_attribute("architecture", c10::StringType::get(), architecture);
+  std::ostringstream source;
+  source << "def forward(self, x):\n"
+         << "    h = (x - self.in_mean) / self.in_scale\n";
+  for (std::size_t layer = 0; layer < weights.size(); ++layer) {
+    const std::string w = "w" + std::to_string(layer), b = "b" + std::to_string(layer);
+    module.register_parameter(w, weights[layer].detach().clone(), false);
+    module.register_parameter(b, biases[layer].detach().clone(), false);
+    const bool last = layer + 1 == weights.size();
+    source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
+           << ".t()) + self." << b << (last ? "" : ")") << "\n";
+  }
+  source << "    return h * self.out_scale + self.out_mean\n";
+  module.define(source.str());
+  module.eval();
+  return module;
+}
+
+}  // namespace
+
+struct StressSurrogate::Impl {
+  mutable torch::jit::Module module;
+  std::string architecture;
+};
+
+void MlpArchitecture::Validate(const std::string& field_prefix) const {
+  if (hidden_widths.empty() || hidden_widths.size() > 16) {
+    throw InputError(field_prefix + "hidden_widths", "needs 1 to 16 hidden layers");
+  }
+  for (int width : hidden_widths) {
+    if (width < 1 || width > 4096) {
+      throw InputError(field_prefix + "hidden_widths", "each layer 1 to 4096 wide");
+    }
+  }
+}
+
+std::string MlpArchitecture::Describe() const {
+  std::string name = "mlp-";
+  for (std::size_t k = 0; k < hidden_widths.size(); ++k) {
+    name += (k ? "x" : "") + std::to_string(hidden_widths[k]);
+  }
+  return name + "-tanh";
+}
+
+void TrainingOptions::Validate(const std::string& field_prefix) const {
+  if (epochs < 1 || epochs > 100000) throw InputError(field_prefix + "epochs", "must be in [1, 100000]");
+  if (batch_size < 1) throw InputError(field_prefix + "batch_size", "must be at least 1");
+  if (!(learning_rate > 0 && learning_rate < 1)) {
+    throw InputError(field_prefix + "learning_rate", "must be in (0, 1)");
+  }
+  if (threads < 1) throw InputError(field_prefix + "threads", "must be at least 1");
+}
+
+StressSurrogate::StressSurrogate(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+StressSurrogate::StressSurrogate(StressSurrogate&&) noexcept = default;
+StressSurrogate& StressSurrogate::operator=(StressSurrogate&&) noexcept = default;
+StressSurrogate::~StressSurrogate() = default;
+
+std::string StressSurrogate::architecture() const { return impl_->architecture; }
+
+std::vector<SurrogateInput> InputsOf(const StrainHistory& history) {
+  std::vector<SurrogateInput> inputs;
+  inputs.reserve(history.steps());
+  Vector6 stress = material::StressToVoigt(history.initial_stress_pa);
+  Vector6 accumulated = Vector6::Zero();
+  for (std::size_t s = 0; s < history.steps(); ++s) {
+    const material::IncrementKinematics kinematics = material::HughesWinget(history.increments[s]);
+    SurrogateInput input;
+    input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
+    input.stress_pa = stress;
+    input.accumulated_strain = accumulated;
+    inputs.push_back(input);
+    accumulated += input.strain_increment;
+    stress = history.stresses_pa[s];
+  }
+  return inputs;
+}
+
+StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histories,
+                                       const MlpArchitecture& architecture,
+                                       const TrainingOptions& options, TrainingReport* report) {
+  architecture.Validate("architecture.");
+  options.Validate("training.");
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<SurrogateInput> inputs;
+  std::vector<Vector6> targets;
+  for (const StrainHistory& history : histories) {
+    const std::vector<SurrogateInput> steps = InputsOf(history);
+    for (std::size_t s = 0; s < steps.size(); ++s) {
+      const Matrix3 rotation = material::HughesWinget(history.increments[s]).rotation;
+      const Matrix3 before = material::VoigtToStress(steps[s].stress_pa);
+      targets.push_back(history.stresses_pa[s] -
+                        material::StressToVoigt(rotation * before * rotation.transpose()));
+      inputs.push_back(steps[s]);
+    }
+  }
+  if (inputs.empty()) throw InputError("histories", "no steps to train on");
+  const torch::Tensor x = InputTensor(inputs);
+  torch::Tensor y = torch::empty({static_cast<std::int64_t>(targets.size()), kOutputs},
+                                 torch::kFloat64);
+  for (std::size_t n = 0; n < targets.size(); ++n) {
+    for (int c = 0; c < kOutputs; ++c) y[n][c] = targets[n][c];
+  }
+  if (!torch::isfinite(x).all().item<bool>() || !torch::isfinite(y).all().item<bool>()) {
+    throw InputError("histories", "a step holds a value that is not finite");
+  }
+  const auto [in_mean, in_scale] = Standardisation(x);
+  const auto [out_mean, out_scale] = Standardisation(y);
+  const torch::Tensor xs = (x - in_mean) / in_scale;
+  const torch::Tensor ys = (y - out_mean) / out_scale;
+
+  torch::set_num_threads(options.threads);
+  torch::manual_seed(options.seed);
+  torch::nn::Sequential net;
+  int width = kInputs;
+  std::vector<torch::nn::Linear> layers;
+  for (int hidden : architecture.hidden_widths) {
+    layers.push_back(torch::nn::Linear(width, hidden));
+    net->push_back(layers.back());
+    net->push_back(torch::nn::Tanh());
+    width = hidden;
+  }
+  layers.push_back(torch::nn::Linear(width, kOutputs));
+  net->push_back(layers.back());
+  net->to(torch::kFloat64);
+
+  torch::optim::Adam optimizer(net->parameters(), torch::optim::AdamOptions(options.learning_rate));
+  const std::int64_t samples = xs.size(0);
+  TrainingReport figures;
+  figures.samples = samples;
+  for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    for (double milestone : {0.5, 0.75, 0.9}) {
+      if (epoch == static_cast<int>(milestone * options.epochs) && epoch > 0) {
+        for (auto& group : optimizer.param_groups()) {
+          auto& adam = static_cast<torch::optim::AdamOptions&>(group.options());
+          adam.lr(adam.lr() * 0.5);
+        }
+      }
+    }
+    const torch::Tensor order = torch::randperm(samples, torch::kInt64);
+    double loss_sum = 0;
+    for (std::int64_t begin = 0; begin < samples; begin += options.batch_size) {
+      const torch::Tensor batch =
+          order.slice(0, begin, std::min<std::int64_t>(begin + options.batch_size, samples));
+      optimizer.zero_grad();
+      const torch::Tensor loss =
+          torch::mse_loss(net->forward(xs.index_select(0, batch)), ys.index_select(0, batch));
+      loss.backward();
+      optimizer.step();
+      loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
+    }
+    const double mean_loss = loss_sum / static_cast<double>(samples);
+    if (epoch == 0) figures.first_loss = mean_loss;
+    figures.final_loss = mean_loss;
+  }
+  std::vector<torch::Tensor> weights, biases;
+  for (const torch::nn::Linear& layer : layers) {
+    weights.push_back(layer->weight);
+    biases.push_back(layer->bias);
+  }
+  auto impl = std::make_unique<Impl>(Impl{
+      ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
+                   architecture.Describe()),
+      architecture.Describe()});
+  figures.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (report != nullptr) *report = figures;
+  return StressSurrogate(std::move(impl));
+}
+
+std::vector<Vector6> StressSurrogate::StressIncrements(const std::vector<SurrogateInput>& inputs,
+                                                       std::vector<Voigt6x6>* tangents) const {
+  std::vector<Vector6> increments(inputs.size());
+  if (inputs.empty()) {
+    if (tangents != nullptr) tangents->clear();
+    return increments;
+  }
+  torch::Tensor x = InputTensor(inputs);
+  torch::Tensor y;
+  if (tangents == nullptr) {
+    torch::NoGradGuard no_grad;
+    y = impl_->module.forward({x}).toTensor();
+  } else {
+    x.requires_grad_(true);
+    y = impl_->module.forward({x}).toTensor();
+    tangents->assign(inputs.size(), Voigt6x6::Zero());
+    for (int row = 0; row < kOutputs; ++row) {
+      // Points are independent, so the gradient of the column's sum is each point's own row.
+      const torch::Tensor gradient =
+          torch::autograd::grad({y.select(1, row).sum()}, {x}, {}, /*retain_graph=*/true)[0];
+      const torch::Tensor block = gradient.slice(1, 0, 6).contiguous();
+      const double* data = block.data_ptr<double>();
+      for (std::size_t n = 0; n < inputs.size(); ++n) {
+        for (int column = 0; column < 6; ++column) {
+          (*tangents)[n](row, column) = data[n * 6 + column];
+        }
+      }
+    }
+    y = y.detach();
+  }
+  y = y.contiguous();
+  const double* data = y.data_ptr<double>();
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    for (int c = 0; c < kOutputs; ++c) increments[n][c] = data[n * kOutputs + c];
+  }
+  return increments;
+}
+
+void StressSurrogate::Save(const std::string& path) const {
+  try {
+    impl_->module.save(path);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot write the surrogate to " + path + ": " + e.what_without_backtrace());
+  }
+}
+
+StressSurrogate StressSurrogate::Load(const std::string& path) {
+  auto impl = std::make_unique<Impl>();
+  try {
+    impl->module = torch::jit::load(path);
+    impl->architecture = impl->module.attr("architecture").toStringRef();
+    impl->module.eval();
+  } catch (const c10::Error& e) {
+    throw InputError("model", "not a gonogo stress surrogate (" + path + "): " +
+                                  e.what_without_backtrace());
+  }
+  return StressSurrogate(std::move(impl));
+}
+
+std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history) {
+  std::vector<Vector6> stresses;
+  stresses.reserve(history.steps());
+  SurrogateInput input;
+  input.stress_pa = material::StressToVoigt(history.initial_stress_pa);
+  for (std::size_t s = 0; s < history.steps(); ++s) {
+    const material::IncrementKinematics kinematics = material::HughesWinget(history.increments[s]);
+    input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
+    const Vector6 increment = surrogate.StressIncrements({input})[0];
+    const Matrix3 before = material::VoigtToStress(input.stress_pa);
+    const Vector6 after =
+        material::StressToVoigt(kinematics.rotation * before * kinematics.rotation.transpose()) +
+        increment;
+    stresses.push_back(after);
+    input.accumulated_strain += input.strain_increment;
+    input.stress_pa = after;
+  }
+  return stresses;
+}
+
+double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history) {
+  const std::vector<Vector6> predicted = Replay(surrogate, history);
+  double error = 0, size = 0;
+  for (std::size_t s = 0; s < predicted.size(); ++s) {
+    error += (material::VoigtToStress(predicted[s]) -
+              material::VoigtToStress(history.stresses_pa[s])).norm();
+    size += material::VoigtToStress(history.stresses_pa[s]).norm();
+  }
+  return size > 0 ? error / size : 0;
+}
+
+}  // namespace gonogo::ann

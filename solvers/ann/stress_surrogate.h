@@ -1,0 +1,102 @@
+// A neural surrogate of a material point's stress update, trained on StrainHistory records
+// (strain_history.h) with libtorch (Debian's libtorch-dev, the PyTorch 1.13 C++ API) and kept as
+// a TorchScript module that Python's torch.jit.load reads.
+//
+// What the network sees and answers (one step of one point, Voigt order xx yy zz yz xz xy):
+//   inputs   the strain increment d_eps (engineering shears) of the step's Hughes-Winget split,
+//            the stress before the step sigma_n (Pa, tension positive) and the strain accumulated
+//            since the path's start eps_n: 18 numbers. The stress alone cannot tell a dense
+//            packing from a loose one at the same stress; the accumulated strain is the history
+//            variable that can (its trace is the change of the void ratio), and the FE point can
+//            carry it exactly.
+//   output   d_sigma, so that sigma_{n+1} = R sigma_n R^T + d_sigma (R the step's rotation: the
+//            update is objective by construction, as every model at the seam).
+// Inputs and outputs are standardised (mean, standard deviation of the training set) inside the
+// module, so the saved file is the whole map from raw inputs to raw outputs.
+// The tangent d sigma_{n+1} / d eps (6 x 6, engineering shears) is the network's own derivative
+// by automatic differentiation, not a separate output.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/strain_history.h"
+
+namespace gonogo::ann {
+
+using Voigt6x6 = material::Voigt6x6;
+
+struct MlpArchitecture {
+  std::vector<int> hidden_widths = {64, 64};  // tanh layers; the seed's network: 7 x 600
+  void Validate(const std::string& field_prefix) const;
+  std::string Describe() const;  // "mlp-64x64-tanh"
+};
+
+struct TrainingOptions {
+  int epochs = 200;
+  int batch_size = 256;
+  double learning_rate = 3e-3;  // Adam; halved at 50 %, 75 % and 90 % of the epochs
+  std::uint64_t seed = 1;       // weights and batch order
+  int threads = 1;              // torch intra-op threads (1: bit-reproducible training)
+  void Validate(const std::string& field_prefix) const;
+};
+
+struct TrainingReport {
+  std::int64_t samples = 0;
+  double first_loss = 0;   // mean squared error of the standardised d_sigma, first epoch
+  double final_loss = 0;   // last epoch
+  double seconds = 0;
+};
+
+// One step of one point, as the network sees it (see above).
+struct SurrogateInput {
+  Vector6 strain_increment = Vector6::Zero();  // engineering shears
+  Vector6 stress_pa = Vector6::Zero();          // before the step
+  Vector6 accumulated_strain = Vector6::Zero();  // since the path's start, engineering shears
+};
+
+class StressSurrogate {
+ public:
+  StressSurrogate(StressSurrogate&&) noexcept;
+  StressSurrogate& operator=(StressSurrogate&&) noexcept;
+  ~StressSurrogate();
+
+  // Trains on every step of `histories`. Throws InputError("histories", ...) when there are no
+  // steps or a value is not finite.
+  static StressSurrogate Train(const std::vector<StrainHistory>& histories,
+                               const MlpArchitecture& architecture,
+                               const TrainingOptions& options, TrainingReport* report = nullptr);
+
+  // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point.
+  std::vector<Vector6> StressIncrements(const std::vector<SurrogateInput>& inputs,
+                                        std::vector<Voigt6x6>* tangents = nullptr) const;
+
+  // TorchScript (torch.jit.load in Python: forward takes an (N, 18) float64 tensor of the inputs
+  // above and gives (N, 6) d_sigma). Load throws InputError("model", ...) for a file that is not
+  // such a module.
+  void Save(const std::string& path) const;
+  static StressSurrogate Load(const std::string& path);
+
+  std::string architecture() const;
+
+ private:
+  struct Impl;
+  explicit StressSurrogate(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The inputs a history gives, step by step, with the true stresses (for training and checks).
+std::vector<SurrogateInput> InputsOf(const StrainHistory& history);
+
+// The surrogate run along a history's increments from its initial stress, feeding back its own
+// stresses (as it runs in an FE point): the predicted stress after each step.
+std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history);
+
+// The replayed path's error relative to the path's own stress: mean over steps of
+// |sigma_predicted - sigma_true| over the mean over steps of |sigma_true| (Frobenius norms of
+// the tensors).
+double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history);
+
+}  // namespace gonogo::ann

@@ -1,0 +1,217 @@
+// The stress surrogate (solvers/ann/stress_surrogate.h) trained on laboratory paths of a
+// Drucker-Prager point (fast, with closed-form behaviour): held-out paths replayed within 5 % of
+// their stress, the autograd tangent against central differences, TorchScript save and load, and
+// reproducible training.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include <unistd.h>
+
+#include "solvers/ann/lab_paths.h"
+#include "solvers/ann/stress_surrogate.h"
+#include "solvers/common/errors.h"
+#include "solvers/material/drucker_prager.h"
+
+namespace gonogo::ann {
+namespace {
+
+const material::DruckerPrager& Soil() {
+  static const material::DruckerPrager* soil = [] {
+    material::DruckerPragerParams params;
+    params.young_pa = 20e6;
+    params.poisson = 0.3;
+    params.cohesion_pa = 1e3;
+    params.friction_angle_deg = 35;
+    params.dilation_angle_deg = 5;
+    return new material::DruckerPrager(params);
+  }();
+  return *soil;
+}
+
+StrainHistory Path(LabPath path, double pressure_pa, double max_strain, std::uint64_t seed = 1) {
+  LabPathSpec spec;
+  spec.path = path;
+  spec.pressure_pa = pressure_pa;
+  spec.max_strain = max_strain;
+  spec.steps = 60;
+  spec.seed = seed;
+  spec.walk_step_strain = 5e-4;
+  StrainHistory history = RunLabPath(Soil(), spec);
+  EXPECT_TRUE(history.stopped_reason.empty()) << history.stopped_reason;
+  return history;
+}
+
+std::vector<StrainHistory> TrainingPaths() {
+  std::vector<StrainHistory> paths;
+  for (double p : {10e3, 20e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kTriaxial, p, 0.02));
+  for (double p : {10e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kSimpleShear, p, 0.04));
+  for (double p : {10e3, 40e3}) paths.push_back(Path(LabPath::kUnloadReload, p, 0.02));
+  for (double p : {10e3, 80e3}) paths.push_back(Path(LabPath::kIsotropic, p, 0.004));
+  for (std::uint64_t seed = 1; seed <= 24; ++seed) {
+    paths.push_back(Path(LabPath::kRandomWalk, 10e3 * (1 + seed % 8), 0.004, seed));
+  }
+  return paths;
+}
+
+const StressSurrogate& Trained(TrainingReport* report = nullptr) {
+  static TrainingReport figures;
+  static const StressSurrogate* surrogate = [] {
+    TrainingOptions options;
+    options.epochs = 300;
+    options.batch_size = 64;
+    return new StressSurrogate(
+        StressSurrogate::Train(TrainingPaths(), MlpArchitecture{}, options, &figures));
+  }();
+  if (report != nullptr) *report = figures;
+  return *surrogate;
+}
+
+TEST(StressSurrogate, ReplaysHeldOutPathsWithinFivePercentOfTheirStress) {
+  TrainingReport report;
+  const StressSurrogate& surrogate = Trained(&report);
+  std::cout << "  " << surrogate.architecture() << ": " << report.samples << " samples, loss "
+            << report.first_loss << " -> " << report.final_loss << ", " << report.seconds
+            << " s\n";
+  EXPECT_LT(report.final_loss, 0.1 * report.first_loss);
+  // Not in the training set: other pressures, another seed.
+  for (const auto& [name, history] :
+       {std::pair{"triaxial 30 kPa", Path(LabPath::kTriaxial, 30e3, 0.02)},
+        std::pair{"simple shear 25 kPa", Path(LabPath::kSimpleShear, 25e3, 0.04)},
+        std::pair{"unload-reload 60 kPa", Path(LabPath::kUnloadReload, 60e3, 0.02)},
+        std::pair{"random walk seed 99", Path(LabPath::kRandomWalk, 30e3, 0.004, 99)}}) {
+    const double error = ReplayError(surrogate, history);
+    std::cout << "  " << name << ": replay error " << 100 * error << " %\n";
+    EXPECT_LT(error, 0.05) << name;
+  }
+}
+
+TEST(StressSurrogate, TheTangentIsTheNetworksOwnDerivative) {
+  const StressSurrogate& surrogate = Trained();
+  const StrainHistory history = Path(LabPath::kSimpleShear, 30e3, 0.04);
+  std::vector<SurrogateInput> inputs = InputsOf(history);
+  inputs.resize(20);
+  std::vector<Voigt6x6> tangents;
+  surrogate.StressIncrements(inputs, &tangents);
+  ASSERT_EQ(tangents.size(), inputs.size());
+  const double h = 1e-7;
+  double largest_error = 0, largest_entry = 0;
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    for (int column = 0; column < 6; ++column) {
+      SurrogateInput up = inputs[n], down = inputs[n];
+      up.strain_increment[column] += h;
+      down.strain_increment[column] -= h;
+      const Vector6 difference =
+          (surrogate.StressIncrements({up})[0] - surrogate.StressIncrements({down})[0]) / (2 * h);
+      for (int row = 0; row < 6; ++row) {
+        largest_error = std::max(largest_error, std::abs(difference[row] - tangents[n](row, column)));
+        largest_entry = std::max(largest_entry, std::abs(tangents[n](row, column)));
+      }
+    }
+  }
+  std::cout << "  tangent: largest entry " << largest_entry << " Pa, largest difference from "
+            << "central differences " << largest_error << " Pa\n";
+  EXPECT_GT(largest_entry, 1e6);  // the soil's stiffness order (E 20 MPa)
+  EXPECT_LT(largest_error, 1e-5 * largest_entry);
+}
+
+TEST(StressSurrogate, SavesAsTorchScriptAndLoadsToTheSameAnswers) {
+  const StressSurrogate& surrogate = Trained();
+  const std::filesystem::path directory =
+      std::filesystem::temp_directory_path() / ("gonogo_surrogate_" + std::to_string(getpid()));
+  std::filesystem::create_directories(directory);
+  const std::string path = (directory / "model.pt").string();
+  surrogate.Save(path);
+  const StressSurrogate loaded = StressSurrogate::Load(path);
+  EXPECT_EQ(loaded.architecture(), "mlp-64x64-tanh");
+  const std::vector<SurrogateInput> inputs = InputsOf(Path(LabPath::kTriaxial, 30e3, 0.02));
+  const std::vector<Vector6> a = surrogate.StressIncrements(inputs);
+  const std::vector<Vector6> b = loaded.StressIncrements(inputs);
+  for (std::size_t n = 0; n < inputs.size(); ++n) EXPECT_EQ(a[n], b[n]) << n;
+  // Python's torch (Debian's python3-torch) loads the same file and answers the same.
+  {
+    std::ofstream table(directory / "inputs.csv");
+    table.precision(17);
+    for (const SurrogateInput& input : inputs) {
+      std::string separator;
+      for (const Vector6* part : {&input.strain_increment, &input.stress_pa,
+                                  &input.accumulated_strain}) {
+        for (int c = 0; c < 6; ++c) {
+          table << separator << (*part)[c];
+          separator = ",";
+        }
+      }
+      table << "\n";
+    }
+    table.close();
+    std::ofstream(directory / "run.py")
+        << "import sys, numpy, torch\n"
+           "model = torch.jit.load(sys.argv[1])\n"
+           "x = torch.from_numpy(numpy.loadtxt(sys.argv[2], delimiter=',', ndmin=2))\n"
+           "y = model(x).detach().numpy()\n"
+           "numpy.savetxt(sys.argv[3], y, fmt='%.17g', delimiter=',')\n"
+           "print(model.architecture)\n";
+    const std::string command = "/usr/bin/python3 " + (directory / "run.py").string() + " " +
+                                path + " " + (directory / "inputs.csv").string() + " " +
+                                (directory / "outputs.csv").string() + " > " +
+                                (directory / "python.out").string() + " 2>&1";
+    const int status = std::system(command.c_str());
+    std::ifstream printed(directory / "python.out");
+    std::string line;
+    std::getline(printed, line);
+    ASSERT_EQ(status, 0) << line;
+    EXPECT_EQ(line, "mlp-64x64-tanh");
+    std::ifstream outputs(directory / "outputs.csv");
+    std::size_t rows = 0;
+    double largest_difference = 0;
+    while (std::getline(outputs, line) && rows < inputs.size()) {
+      std::stringstream cells(line);
+      std::string cell;
+      for (int c = 0; c < 6 && std::getline(cells, cell, ','); ++c) {
+        largest_difference = std::max(largest_difference, std::abs(std::stod(cell) - a[rows][c]));
+      }
+      ++rows;
+    }
+    EXPECT_EQ(rows, inputs.size());
+    EXPECT_LT(largest_difference, 1e-9) << "Pa, Python against C++";
+  }
+  std::ofstream(directory / "junk.pt") << "not a model";
+  try {
+    StressSurrogate::Load((directory / "junk.pt").string());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "model");
+  }
+  std::filesystem::remove_all(directory);
+}
+
+TEST(StressSurrogate, TrainingIsReproducibleAndRefusesNothingToLearn) {
+  const std::vector<StrainHistory> paths = {Path(LabPath::kTriaxial, 20e3, 0.02)};
+  TrainingOptions options;
+  options.epochs = 20;
+  const StressSurrogate a = StressSurrogate::Train(paths, MlpArchitecture{{16}}, options);
+  const StressSurrogate b = StressSurrogate::Train(paths, MlpArchitecture{{16}}, options);
+  const std::vector<SurrogateInput> inputs = InputsOf(paths[0]);
+  EXPECT_EQ(a.StressIncrements(inputs)[30], b.StressIncrements(inputs)[30]);
+  options.seed = 2;
+  const StressSurrogate c = StressSurrogate::Train(paths, MlpArchitecture{{16}}, options);
+  EXPECT_NE(a.StressIncrements(inputs)[30], c.StressIncrements(inputs)[30]);
+  try {
+    StressSurrogate::Train({}, MlpArchitecture{}, options);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "histories");
+  }
+  EXPECT_THROW(StressSurrogate::Train(paths, MlpArchitecture{{}}, options), InputError);
+  options.epochs = 0;
+  EXPECT_THROW(StressSurrogate::Train(paths, MlpArchitecture{}, options), InputError);
+}
+
+}  // namespace
+}  // namespace gonogo::ann
