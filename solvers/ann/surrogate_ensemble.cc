@@ -1,0 +1,204 @@
+#include "solvers/ann/surrogate_ensemble.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "solvers/common/byte_stream.h"
+#include "solvers/common/errors.h"
+
+namespace gonogo::ann {
+namespace {
+
+constexpr int kInputs = 18;
+constexpr char kEnvelopeTag[9] = "GNGENV01";
+
+Eigen::VectorXd Raw(const SurrogateInput& input) {
+  Eigen::VectorXd x(kInputs);
+  x << input.strain_increment, input.stress_pa, input.accumulated_strain;
+  return x;
+}
+
+double StressScale(const SurrogateInput& input, const Vector6& increment) {
+  return std::max({material::VoigtToStress(input.stress_pa).norm(),
+                   material::VoigtToStress(increment).norm(), 1.0});
+}
+
+void PutVector(ByteWriter& out, const Eigen::VectorXd& values) {
+  out.Put(static_cast<std::uint64_t>(values.size()));
+  for (Eigen::Index k = 0; k < values.size(); ++k) out.Put(values[k]);
+}
+
+Eigen::VectorXd GetVector(ByteReader& in) {
+  std::uint64_t size = 0;
+  in.Get(size);
+  if (size != kInputs) throw InputError("model", "envelope of another input size");
+  Eigen::VectorXd values(kInputs);
+  for (int k = 0; k < kInputs; ++k) in.Get(values[k]);
+  return values;
+}
+
+}  // namespace
+
+double InputEnvelope::Distance(const SurrogateInput& input) const {
+  const Eigen::VectorXd z = (Raw(input) - offset).cwiseQuotient(scale) - mean;
+  return std::sqrt(std::max(0.0, z.dot(inverse_covariance * z)));
+}
+
+InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs) {
+  if (training_inputs.size() < 2) {
+    throw InputError("histories", "an envelope needs two training steps at least");
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(training_inputs.size());
+  Eigen::MatrixXd raw(n, kInputs);
+  for (Eigen::Index k = 0; k < n; ++k) raw.row(k) = Raw(training_inputs[k]).transpose();
+  InputEnvelope envelope;
+  envelope.offset = raw.colwise().mean().transpose();
+  const Eigen::MatrixXd centred = raw.rowwise() - envelope.offset.transpose();
+  envelope.scale = (centred.colwise().squaredNorm() / static_cast<double>(n)).cwiseSqrt().transpose();
+  for (int c = 0; c < kInputs; ++c) {
+    if (!(envelope.scale[c] > 0)) envelope.scale[c] = 1;  // never moved: any move is far
+  }
+  const Eigen::MatrixXd z = centred.array().rowwise() / envelope.scale.transpose().array();
+  envelope.mean = z.colwise().mean().transpose();
+  const Eigen::MatrixXd zc = z.rowwise() - envelope.mean.transpose();
+  Eigen::MatrixXd covariance = zc.transpose() * zc / static_cast<double>(n);
+  covariance.diagonal().array() += 1e-6;
+  envelope.inverse_covariance = covariance.ldlt().solve(Eigen::MatrixXd::Identity(kInputs, kInputs));
+  for (const SurrogateInput& input : training_inputs) {
+    envelope.largest_training_distance =
+        std::max(envelope.largest_training_distance, envelope.Distance(input));
+  }
+  return envelope;
+}
+
+SurrogateEnsemble SurrogateEnsemble::Train(const std::vector<StrainHistory>& histories,
+                                           const MlpArchitecture& architecture,
+                                           const TrainingOptions& options, int members) {
+  if (members < 3 || members > 64) throw InputError("members", "must be in [3, 64]");
+  SurrogateEnsemble ensemble;
+  for (int k = 0; k < members; ++k) {
+    TrainingOptions member_options = options;
+    member_options.seed = options.seed + static_cast<std::uint64_t>(k);
+    ensemble.members_.push_back(StressSurrogate::Train(histories, architecture, member_options));
+  }
+  std::vector<SurrogateInput> inputs;
+  for (const StrainHistory& history : histories) {
+    const std::vector<SurrogateInput> steps = InputsOf(history);
+    inputs.insert(inputs.end(), steps.begin(), steps.end());
+  }
+  ensemble.envelope_ = FitEnvelope(inputs);
+  ensemble.distance_threshold_ = ensemble.envelope_.largest_training_distance;
+  ensemble.spread_threshold_ = 1.0;  // no flag while the training spread is measured
+  double largest_spread = 0;
+  for (const EnsembleAnswer& answer : ensemble.Answer(inputs, false)) {
+    largest_spread = std::max(largest_spread, answer.relative_spread);
+  }
+  ensemble.spread_threshold_ = std::max(3 * largest_spread, 1e-12);
+  return ensemble;
+}
+
+void SurrogateEnsemble::SetThresholds(double distance_threshold, double spread_threshold) {
+  if (!(distance_threshold > 0)) throw InputError("distance_threshold", "must be positive");
+  if (!(spread_threshold > 0)) throw InputError("spread_threshold", "must be positive");
+  distance_threshold_ = distance_threshold;
+  spread_threshold_ = spread_threshold;
+}
+
+std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<SurrogateInput>& inputs,
+                                                      bool want_tangent) const {
+  std::vector<EnsembleAnswer> answers(inputs.size());
+  std::vector<std::vector<Vector6>> increments;
+  const double members = static_cast<double>(members_.size());
+  for (const StressSurrogate& member : members_) {
+    std::vector<Voigt6x6> tangents;
+    increments.push_back(member.StressIncrements(inputs, want_tangent ? &tangents : nullptr));
+    for (std::size_t n = 0; n < inputs.size() && want_tangent; ++n) {
+      answers[n].tangent_pa += tangents[n] / members;
+    }
+  }
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    EnsembleAnswer& answer = answers[n];
+    for (const std::vector<Vector6>& member : increments) {
+      answer.stress_increment_pa += member[n] / members;
+    }
+    Vector6 variance = Vector6::Zero();
+    for (const std::vector<Vector6>& member : increments) {
+      variance += (member[n] - answer.stress_increment_pa).cwiseAbs2() / members;
+    }
+    answer.relative_spread =
+        variance.cwiseSqrt().maxCoeff() / StressScale(inputs[n], answer.stress_increment_pa);
+    answer.distance = envelope_.Distance(inputs[n]);
+    answer.out_of_distribution =
+        answer.distance > distance_threshold_ || answer.relative_spread > spread_threshold_;
+  }
+  return answers;
+}
+
+void SurrogateEnsemble::Save(const std::string& directory) const {
+  std::filesystem::create_directories(directory);
+  for (std::size_t k = 0; k < members_.size(); ++k) {
+    members_[k].Save((std::filesystem::path(directory) / ("member_" + std::to_string(k) + ".pt"))
+                         .string());
+  }
+  ByteWriter out;
+  out.PutTag(kEnvelopeTag);
+  out.Put(static_cast<std::uint64_t>(members_.size()));
+  PutVector(out, envelope_.offset);
+  PutVector(out, envelope_.scale);
+  PutVector(out, envelope_.mean);
+  for (int i = 0; i < kInputs; ++i) {
+    for (int j = 0; j < kInputs; ++j) out.Put(envelope_.inverse_covariance(i, j));
+  }
+  out.Put(envelope_.largest_training_distance);
+  out.Put(distance_threshold_);
+  out.Put(spread_threshold_);
+  const std::string path = (std::filesystem::path(directory) / "envelope.bin").string();
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  const std::string bytes = out.Take();
+  file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  file.close();
+  if (!file) throw std::runtime_error("cannot write " + path);
+}
+
+SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
+  const std::string path = (std::filesystem::path(directory) / "envelope.bin").string();
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError("model", "no ensemble in " + directory + " (no envelope.bin)");
+  std::stringstream buffer;
+  buffer << file.rdbuf();
+  const std::string bytes = buffer.str();
+  SurrogateEnsemble ensemble;
+  try {
+    ByteReader in(bytes);
+    in.ExpectTag(kEnvelopeTag);
+    std::uint64_t members = 0;
+    in.Get(members);
+    if (members < 3 || members > 64) throw InputError("model", "implausible member count");
+    ensemble.envelope_.offset = GetVector(in);
+    ensemble.envelope_.scale = GetVector(in);
+    ensemble.envelope_.mean = GetVector(in);
+    ensemble.envelope_.inverse_covariance.resize(kInputs, kInputs);
+    for (int i = 0; i < kInputs; ++i) {
+      for (int j = 0; j < kInputs; ++j) in.Get(ensemble.envelope_.inverse_covariance(i, j));
+    }
+    in.Get(ensemble.envelope_.largest_training_distance);
+    in.Get(ensemble.distance_threshold_);
+    in.Get(ensemble.spread_threshold_);
+    if (!in.AtEnd()) throw InputError("model", "trailing bytes in envelope.bin");
+    for (std::uint64_t k = 0; k < members; ++k) {
+      ensemble.members_.push_back(StressSurrogate::Load(
+          (std::filesystem::path(directory) / ("member_" + std::to_string(k) + ".pt")).string()));
+    }
+  } catch (const InputError& e) {
+    if (e.field() == "model") throw;
+    throw InputError("model", std::string("envelope.bin: ") + e.what());
+  }
+  return ensemble;
+}
+
+}  // namespace gonogo::ann

@@ -1,0 +1,81 @@
+// An ensemble of stress surrogates (stress_surrogate.h) that knows when not to trust itself.
+//
+// Members are trained on the same histories from different seeds (initial weights and batch
+// order: a deep ensemble); the answer is their mean, its spread their disagreement. A point is
+// out of distribution when either
+//   - its inputs are far from the training inputs: the Mahalanobis distance
+//       d(x) = sqrt((z - mu)^T S^-1 (z - mu)),  z the standardised inputs, mu and S the mean and
+//     covariance of the training set's z (with 1e-6 added to S's diagonal, so that a direction
+//     the training never moved in is far, not undefined), exceeds `distance_threshold`; by
+//     default the largest distance of any training input (outside the cloud the network has
+//     seen, by that measure), or
+//   - the members disagree: the spread, the largest standard deviation over the members of a
+//     d_sigma component, relative to the point's stress scale max(|sigma_n|, |d_sigma|, 1 Pa),
+//     exceeds `spread_threshold`; by default 3 x the largest relative spread over the training
+//     inputs.
+// Both thresholds can be set; the ensemble only flags, the material (ann_material.h) decides
+// what a flag does.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "solvers/ann/stress_surrogate.h"
+
+namespace gonogo::ann {
+
+struct InputEnvelope {
+  Eigen::VectorXd mean;               // of the standardised training inputs (18)
+  Eigen::VectorXd scale;              // standardisation: standard deviations of the raw inputs
+  Eigen::VectorXd offset;             // and their means
+  Eigen::MatrixXd inverse_covariance;
+  double largest_training_distance = 0;
+  // Mahalanobis distance of one input from the training inputs.
+  double Distance(const SurrogateInput& input) const;
+};
+
+InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs);
+
+struct EnsembleAnswer {
+  Vector6 stress_increment_pa = Vector6::Zero();  // mean over the members
+  Voigt6x6 tangent_pa = Voigt6x6::Zero();         // mean, when asked
+  double distance = 0;                            // from the training inputs
+  double relative_spread = 0;                     // see above
+  bool out_of_distribution = false;
+};
+
+class SurrogateEnsemble {
+ public:
+  // Trains `members` (at least 3) surrogates with seeds options.seed, +1, ... and fits the
+  // envelope and the default thresholds on the histories' inputs.
+  static SurrogateEnsemble Train(const std::vector<StrainHistory>& histories,
+                                 const MlpArchitecture& architecture,
+                                 const TrainingOptions& options, int members = 3);
+
+  std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
+                                     bool want_tangent) const;
+
+  double distance_threshold() const { return distance_threshold_; }
+  double spread_threshold() const { return spread_threshold_; }
+  // Throws InputError(field, ...) for a threshold that is not positive.
+  void SetThresholds(double distance_threshold, double spread_threshold);
+  const InputEnvelope& envelope() const { return envelope_; }
+  std::size_t size() const { return members_.size(); }
+  const StressSurrogate& member(std::size_t k) const { return members_.at(k); }
+
+  // A directory: member_<k>.pt (TorchScript, each loadable alone) and envelope.bin (the envelope
+  // and thresholds, tagged little-endian doubles). Load throws InputError("model", ...) for a
+  // directory that does not hold a whole ensemble.
+  void Save(const std::string& directory) const;
+  static SurrogateEnsemble Load(const std::string& directory);
+
+ private:
+  std::vector<StressSurrogate> members_;
+  InputEnvelope envelope_;
+  double distance_threshold_ = 0;
+  double spread_threshold_ = 0;
+};
+
+}  // namespace gonogo::ann
