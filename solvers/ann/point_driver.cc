@@ -58,7 +58,8 @@ Matrix3 MaterialPointDriver::Step(const MixedStep& step) {
       std::max(options_.relative_tolerance * largest_target, options_.absolute_tolerance_pa);
   const int free = static_cast<int>(held.size());
   Vector6 strain = step.strain_increment;
-  for (int c : held) strain[c] = 0;  // the first guess: the held components do not move
+  const bool continuing = step.stress_controlled == last_controlled_;
+  for (int c : held) strain[c] = continuing ? last_strain_[c] : 0;
 
   std::string last_reason = "no iteration";
   for (iterations_ = 1; iterations_ <= options_.max_iterations; ++iterations_) {
@@ -73,6 +74,8 @@ Matrix3 MaterialPointDriver::Step(const MixedStep& step) {
     if (free == 0 || residual.cwiseAbs().maxCoeff() <= tolerance) {
       committed_ = std::move(response.state);
       stress_pa_ = response.stress_pa;
+      last_controlled_ = step.stress_controlled;
+      last_strain_ = strain;
       return increment;
     }
     if (!response.has_tangent) {

@@ -6,7 +6,9 @@
 // method on the model's own tangent,
 //   delta_eps_s <- delta_eps_s - (D_ss)^-1 (sigma_s(delta_eps) - sigma_s_target),
 // each iteration a trial update from the committed state (nothing is committed until the step
-// converges), as a servo-controlled laboratory cell holds its confining stress. A prescribed spin
+// converges), as a servo-controlled laboratory cell holds its confining stress. The first guess
+// of the held components is the last step's, when it held the same ones (zero otherwise), so
+// that a model is tried near where the path goes (a surrogate is asked what it was trained on). A prescribed spin
 // (the skew part of the displacement-gradient increment) lets a step be a true simple shear.
 #pragma once
 
@@ -65,6 +67,11 @@ class MaterialPointDriver {
 
  private:
   material::PointResponse TryIncrement(const Matrix3& increment, bool want_tangent) const;
+
+  // The last converged step's control and strain increment: the first guess of the held
+  // components when the next step holds the same ones (a continuing path moves as it did).
+  std::array<bool, 6> last_controlled_{};
+  Vector6 last_strain_ = Vector6::Zero();
 
   const material::ConstitutiveModel& model_;
   DriverOptions options_;

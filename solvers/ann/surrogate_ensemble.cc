@@ -23,9 +23,9 @@ Eigen::VectorXd Raw(const SurrogateInput& input) {
   return x;
 }
 
-double StressScale(const SurrogateInput& input, const Vector6& increment) {
+double StressScale(const SurrogateInput& input, const Vector6& increment, double floor_pa) {
   return std::max({material::VoigtToStress(input.stress_pa).norm(),
-                   material::VoigtToStress(increment).norm(), 1.0});
+                   material::VoigtToStress(increment).norm(), floor_pa});
 }
 
 void PutVector(ByteWriter& out, const Eigen::VectorXd& values) {
@@ -69,6 +69,11 @@ InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs) {
   Eigen::MatrixXd covariance = zc.transpose() * zc / static_cast<double>(n);
   covariance.diagonal().array() += 1e-6;
   envelope.inverse_covariance = covariance.ldlt().solve(Eigen::MatrixXd::Identity(kInputs, kInputs));
+  double stress_sum = 0;
+  for (const SurrogateInput& input : training_inputs) {
+    stress_sum += material::VoigtToStress(input.stress_pa).norm();
+  }
+  envelope.stress_floor_pa = std::max(0.1 * stress_sum / static_cast<double>(n), 1.0);
   for (const SurrogateInput& input : training_inputs) {
     envelope.largest_training_distance =
         std::max(envelope.largest_training_distance, envelope.Distance(input));
@@ -131,7 +136,8 @@ std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<Surrogat
       variance += (member[n] - answer.stress_increment_pa).cwiseAbs2() / members;
     }
     answer.relative_spread =
-        variance.cwiseSqrt().maxCoeff() / StressScale(inputs[n], answer.stress_increment_pa);
+        variance.cwiseSqrt().maxCoeff() /
+        StressScale(inputs[n], answer.stress_increment_pa, envelope_.stress_floor_pa);
     answer.distance = envelope_.Distance(inputs[n]);
     answer.out_of_distribution =
         answer.distance > distance_threshold_ || answer.relative_spread > spread_threshold_;
@@ -155,6 +161,7 @@ void SurrogateEnsemble::Save(const std::string& directory) const {
     for (int j = 0; j < kInputs; ++j) out.Put(envelope_.inverse_covariance(i, j));
   }
   out.Put(envelope_.largest_training_distance);
+  out.Put(envelope_.stress_floor_pa);
   out.Put(distance_threshold_);
   out.Put(spread_threshold_);
   const std::string path = (std::filesystem::path(directory) / "envelope.bin").string();
@@ -187,6 +194,7 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
       for (int j = 0; j < kInputs; ++j) in.Get(ensemble.envelope_.inverse_covariance(i, j));
     }
     in.Get(ensemble.envelope_.largest_training_distance);
+    in.Get(ensemble.envelope_.stress_floor_pa);
     in.Get(ensemble.distance_threshold_);
     in.Get(ensemble.spread_threshold_);
     if (!in.AtEnd()) throw InputError("model", "trailing bytes in envelope.bin");

@@ -10,9 +10,10 @@
 //     default the largest distance of any training input (outside the cloud the network has
 //     seen, by that measure), or
 //   - the members disagree: the spread, the largest standard deviation over the members of a
-//     d_sigma component, relative to the point's stress scale max(|sigma_n|, |d_sigma|, 1 Pa),
+//     d_sigma component, relative to the point's stress scale max(|sigma_n|, |d_sigma|, s_0),
 //     exceeds `spread_threshold`; by default 3 x the largest relative spread over the training
-//     inputs.
+//     inputs. s_0 is a tenth of the training stresses' mean |sigma|: near zero stress the members
+//     disagree by a few Pa, which is nothing, not a large fraction of nothing.
 // Both thresholds can be set; the ensemble only flags, the material (ann_material.h) decides
 // what a flag does.
 #pragma once
@@ -32,6 +33,7 @@ struct InputEnvelope {
   Eigen::VectorXd offset;             // and their means
   Eigen::MatrixXd inverse_covariance;
   double largest_training_distance = 0;
+  double stress_floor_pa = 1;  // s_0 above
   // Mahalanobis distance of one input from the training inputs.
   double Distance(const SurrogateInput& input) const;
 };

@@ -1,6 +1,7 @@
 // The surrogate ensemble (solvers/ann/surrogate_ensemble.h): its members' mean, the Mahalanobis
 // envelope and the spread flagging what lies outside the training (Drucker-Prager lab paths at
-// 10-80 kPa) and not what lies inside, settable thresholds, and saving and loading.
+// 10-80 kPa) and not what lies inside, settable thresholds, and saving and loading; and the ANN
+// material (ann_material.h) on the same ensemble, falling back to the Drucker-Prager model itself.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include <unistd.h>
 
+#include "solvers/ann/ann_material.h"
 #include "solvers/ann/lab_paths.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/common/errors.h"
@@ -44,7 +46,9 @@ std::vector<StrainHistory> TrainingPaths() {
   std::vector<StrainHistory> paths;
   for (double p : {10e3, 20e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kTriaxial, p, 0.02));
   for (double p : {10e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kSimpleShear, p, 0.04));
-  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+  for (double p : {10e3, 40e3}) paths.push_back(Path(LabPath::kUnloadReload, p, 0.02));
+  for (double p : {10e3, 80e3}) paths.push_back(Path(LabPath::kIsotropic, p, 0.004));
+  for (std::uint64_t seed = 1; seed <= 24; ++seed) {
     paths.push_back(Path(LabPath::kRandomWalk, 10e3 * (1 + seed % 8), 0.004, seed));
   }
   return paths;
@@ -53,7 +57,7 @@ std::vector<StrainHistory> TrainingPaths() {
 const SurrogateEnsemble& Trained() {
   static const SurrogateEnsemble* ensemble = [] {
     TrainingOptions options;
-    options.epochs = 150;
+    options.epochs = 300;
     options.batch_size = 64;
     return new SurrogateEnsemble(
         SurrogateEnsemble::Train(TrainingPaths(), MlpArchitecture{}, options));
@@ -151,6 +155,124 @@ TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
   }
   EXPECT_THROW(SurrogateEnsemble::Train(TrainingPaths(), MlpArchitecture{}, TrainingOptions{}, 2),
                InputError);
+}
+
+std::shared_ptr<const material::DruckerPrager> SharedSoil() {
+  return std::shared_ptr<const material::DruckerPrager>(&Soil(), [](const auto*) {});
+}
+
+std::shared_ptr<const SurrogateEnsemble> SharedEnsemble() {
+  return std::shared_ptr<const SurrogateEnsemble>(&Trained(), [](const auto*) {});
+}
+
+// Stress error of a path relative to the reference path's stress (ReplayError's measure).
+double PathError(const StrainHistory& got, const StrainHistory& reference) {
+  double error = 0, size = 0;
+  for (std::size_t s = 0; s < std::min(got.steps(), reference.steps()); ++s) {
+    error += (material::VoigtToStress(got.stresses_pa[s]) -
+              material::VoigtToStress(reference.stresses_pa[s])).norm();
+    size += material::VoigtToStress(reference.stresses_pa[s]).norm();
+  }
+  return error / size;
+}
+
+LabPathSpec Triaxial(double pressure_pa) {
+  LabPathSpec spec;
+  spec.path = LabPath::kTriaxial;
+  spec.pressure_pa = pressure_pa;
+  spec.max_strain = 0.02;
+  spec.steps = 60;
+  return spec;
+}
+
+// Reads, from an ANN point's committed state, the step it fell back at (-1: on the network).
+InternalVariables FellBackAt() {
+  InternalVariables internal;
+  internal.names = {"fell_back_at_step"};
+  internal.read = [](const material::MaterialState& state) {
+    return std::vector<double>{
+        static_cast<double>(static_cast<const AnnState&>(state).fell_back_at_step)};
+  };
+  return internal;
+}
+
+TEST(AnnMaterial, FollowsTheSoilInsideItsTrainingWithoutFallingBack) {
+  const AnnMaterial ann(SharedEnsemble(), SharedSoil());
+  // The same servo-controlled test on both: the driver holds the lateral stress with the
+  // network's autograd tangent.
+  const StrainHistory on_network = RunLabPath(ann, Triaxial(30e3), {}, FellBackAt());
+  const StrainHistory on_soil = RunLabPath(Soil(), Triaxial(30e3));
+  ASSERT_TRUE(on_network.stopped_reason.empty()) << on_network.stopped_reason;
+  const double error = PathError(on_network, on_soil);
+  std::cout << "  triaxial at 30 kPa through the seam: " << 100 * error << " % off the soil's\n";
+  EXPECT_LT(error, 0.05);
+  EXPECT_EQ(on_network.internal_variables.back()[0], -1.0) << "still on the network";
+  EXPECT_TRUE(ann.log().fallbacks().empty()) << "not even in a trial";
+}
+
+TEST(AnnMaterial, APointDrivenOutOfItsEnvelopeFallsBackToTheRealModel) {
+  const AnnMaterial ann(SharedEnsemble(), SharedSoil());
+  const StrainHistory history = RunLabPath(ann, Triaxial(800e3), {}, FellBackAt());
+  ASSERT_TRUE(history.stopped_reason.empty()) << history.stopped_reason;
+  const double fell_back_at = history.internal_variables.back()[0];
+  // The log has every fallback the material made, the driver's discarded trials included.
+  const std::vector<FallbackLog::Event> events = ann.log().fallbacks();
+  ASSERT_FALSE(events.empty());
+  std::cout << "  fell back at its step " << fell_back_at << " of " << history.steps()
+            << "; first logged at distance " << events[0].distance << " (threshold "
+            << Trained().distance_threshold() << "), " << events.size() << " logged in all\n";
+  EXPECT_GE(fell_back_at, 0.0);
+  EXPECT_GT(events[0].distance, Trained().distance_threshold());
+  // From the fallback on, the point is the soil along the increments it took: the same stress,
+  // bit for bit, as the soil driven through those increments from its start.
+  std::unique_ptr<material::MaterialState> soil = Soil().InitialState();
+  Matrix3 stress = Matrix3::Zero();
+  for (const Matrix3& increment : history.increments) {
+    std::vector<material::PointResponse> step = Soil().Update({{increment, soil.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk);
+    soil = std::move(step[0].state);
+    stress = step[0].stress_pa;
+  }
+  EXPECT_EQ(material::StressToVoigt(stress), history.stresses_pa.back());
+  // With the fallback off, the network answers every flagged step and counts it.
+  AnnMaterialOptions no_fallback;
+  no_fallback.fallback_enabled = false;
+  const AnnMaterial alone(SharedEnsemble(), nullptr, no_fallback);
+  const StrainHistory unguarded = RunLabPath(alone, Triaxial(800e3));
+  std::cout << "  without the fallback: " << unguarded.steps() << " steps, "
+            << alone.log().unanswered_flags() << " flags answered by the network; "
+            << (unguarded.stopped_reason.empty() ? "ran to the end" : unguarded.stopped_reason)
+            << "\n";
+  EXPECT_TRUE(alone.log().fallbacks().empty());
+  EXPECT_GT(alone.log().unanswered_flags(), 0);
+  EXPECT_THROW(AnnMaterial(SharedEnsemble(), nullptr), InputError);
+}
+
+TEST(AnnMaterial, StatesSaveAndRestoreOnAndOffTheNetwork) {
+  const AnnMaterial ann(SharedEnsemble(), SharedSoil());
+  std::unique_ptr<material::MaterialState> state = ann.InitialState();
+  Matrix3 increment = Matrix3::Zero();
+  increment(2, 2) = -1e-4;
+  increment(0, 2) = 2e-4;
+  for (int s = 0; s < 5; ++s) {
+    std::vector<material::PointResponse> step = ann.Update({{increment, state.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk) << step[0].reason;
+    state = std::move(step[0].state);
+  }
+  const std::string on_network = state->Serialize();
+  EXPECT_EQ(ann.RestoreState(on_network)->Serialize(), on_network);
+  EXPECT_EQ(static_cast<const AnnState&>(*ann.RestoreState(on_network)).steps(), 5);
+  // A huge jump leaves the envelope: the point falls back and keeps its fallback state.
+  std::vector<material::PointResponse> jump = ann.Update({{increment * 40, state.get()}}, true);
+  ASSERT_EQ(jump[0].status, material::UpdateStatus::kOk) << jump[0].reason;
+  EXPECT_TRUE(jump[0].has_tangent);
+  const auto& fallen = static_cast<const AnnState&>(*jump[0].state);
+  ASSERT_NE(fallen.fallback, nullptr);
+  EXPECT_EQ(fallen.fell_back_at_step, 5);
+  const std::string off_network = fallen.Serialize();
+  EXPECT_EQ(ann.RestoreState(off_network)->Serialize(), off_network);
+  EXPECT_THROW(ann.RestoreState(off_network.substr(0, off_network.size() - 3)), InputError);
+  EXPECT_THROW(ann.RestoreState("not a state"), InputError);
 }
 
 }  // namespace

@@ -1,0 +1,276 @@
+#include "solvers/ann/ann_material.h"
+
+#include <algorithm>
+
+#include "solvers/common/byte_stream.h"
+#include "solvers/common/errors.h"
+#include "solvers/material/kinematics.h"
+
+namespace gonogo::ann {
+namespace {
+
+constexpr char kStateTag[9] = "GNGANN01";
+
+std::shared_ptr<const IncrementNode> Append(std::shared_ptr<const IncrementNode> history,
+                                            const Matrix3& increment) {
+  auto node = std::make_shared<IncrementNode>();
+  node->increment = increment;
+  node->count = history ? history->count + 1 : 1;
+  node->previous = std::move(history);
+  return node;
+}
+
+material::PointResponse Failed(const std::string& reason) {
+  material::PointResponse response;
+  response.status = material::UpdateStatus::kFailed;
+  response.reason = reason;
+  return response;
+}
+
+}  // namespace
+
+IncrementNode::~IncrementNode() {
+  std::shared_ptr<const IncrementNode> next = std::move(previous);
+  while (next && next.use_count() == 1) {
+    // The last owner: take its tail before it goes, so each node dies with an empty link.
+    std::shared_ptr<const IncrementNode> tail =
+        std::move(const_cast<IncrementNode&>(*next).previous);
+    next = std::move(tail);
+  }
+}
+
+void FallbackLog::RecordFallback(const Event& event) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  fallbacks_.push_back(event);
+}
+
+void FallbackLog::RecordUnansweredFlag() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++unanswered_flags_;
+}
+
+std::vector<FallbackLog::Event> FallbackLog::fallbacks() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return fallbacks_;
+}
+
+std::int64_t FallbackLog::unanswered_flags() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return unanswered_flags_;
+}
+
+std::vector<Matrix3> AnnState::Increments() const {
+  std::vector<Matrix3> increments;
+  increments.reserve(static_cast<std::size_t>(steps()));
+  for (const IncrementNode* node = history.get(); node != nullptr; node = node->previous.get()) {
+    increments.push_back(node->increment);
+  }
+  std::reverse(increments.begin(), increments.end());
+  return increments;
+}
+
+std::unique_ptr<material::MaterialState> AnnState::Clone() const {
+  auto copy = std::make_unique<AnnState>();
+  copy->stress_pa = stress_pa;
+  copy->accumulated_strain = accumulated_strain;
+  copy->history = history;
+  copy->flags = flags;
+  copy->fallback = fallback ? fallback->Clone() : nullptr;
+  copy->fell_back_at_step = fell_back_at_step;
+  return copy;
+}
+
+std::string AnnState::Serialize() const {
+  ByteWriter out;
+  out.PutTag(kStateTag);
+  out.Put(stress_pa);
+  for (int c = 0; c < 6; ++c) out.Put(accumulated_strain[c]);
+  out.Put(flags);
+  out.Put(fell_back_at_step);
+  const std::vector<Matrix3> increments = Increments();
+  out.Put(static_cast<std::uint64_t>(increments.size()));
+  for (const Matrix3& increment : increments) out.Put(increment);
+  out.PutBlob(fallback ? fallback->Serialize() : std::string());
+  return out.Take();
+}
+
+AnnMaterial::AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
+                         std::shared_ptr<const material::ConstitutiveModel> fallback,
+                         AnnMaterialOptions options)
+    : ensemble_(std::move(ensemble)), fallback_(std::move(fallback)), options_(options) {
+  if (ensemble_ == nullptr) throw InputError("ensemble", "is required");
+  if (options_.fallback_enabled && fallback_ == nullptr) {
+    throw InputError("fallback", "a model to fall back to is required while the fallback is on");
+  }
+  initial_stress_pa_ = options_.initial_stress_pa;
+  if (fallback_ != nullptr) {
+    // A fresh point starts where the real model's fresh point does.
+    const std::unique_ptr<material::MaterialState> fresh = fallback_->InitialState();
+    material::PointIncrement zero;
+    zero.committed = fresh.get();
+    const std::vector<material::PointResponse> start = fallback_->Update({zero}, false);
+    if (start.at(0).status != material::UpdateStatus::kOk) {
+      throw NumericalError("fallback model: a zero increment on its initial state failed: " +
+                           start.at(0).reason);
+    }
+    initial_stress_pa_ = start.at(0).stress_pa;
+  }
+}
+
+std::unique_ptr<material::MaterialState> AnnMaterial::InitialState() const {
+  auto state = std::make_unique<AnnState>();
+  state->stress_pa = initial_stress_pa_;
+  return state;
+}
+
+std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::string& bytes) const {
+  auto state = std::make_unique<AnnState>();
+  try {
+    ByteReader in(bytes);
+    in.ExpectTag(kStateTag);
+    in.Get(state->stress_pa);
+    for (int c = 0; c < 6; ++c) in.Get(state->accumulated_strain[c]);
+    in.Get(state->flags);
+    in.Get(state->fell_back_at_step);
+    std::uint64_t steps = 0;
+    in.Get(steps);
+    if (steps > bytes.size() / 72) throw InputError("state", "step count larger than the bytes");
+    for (std::uint64_t s = 0; s < steps; ++s) {
+      Matrix3 increment;
+      in.Get(increment);
+      state->history = Append(std::move(state->history), increment);
+    }
+    std::string fallback_bytes;
+    in.GetBlob(fallback_bytes);
+    if (!in.AtEnd()) throw InputError("state", "trailing bytes");
+    if (!fallback_bytes.empty()) {
+      if (fallback_ == nullptr) throw InputError("state", "a fallen-back point and no fallback");
+      state->fallback = fallback_->RestoreState(fallback_bytes);
+    }
+  } catch (const InputError& e) {
+    throw InputError("material.state", e.what());
+  }
+  return state;
+}
+
+material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const Matrix3& increment,
+                                              bool want_tangent) const {
+  std::unique_ptr<material::MaterialState> state = fallback_->InitialState();
+  const std::vector<Matrix3> history = committed.Increments();
+  for (std::size_t s = 0; s < history.size(); ++s) {
+    material::PointIncrement replay;
+    replay.displacement_gradient_increment = history[s];
+    replay.committed = state.get();
+    std::vector<material::PointResponse> step = fallback_->Update({replay}, false);
+    if (step.at(0).status != material::UpdateStatus::kOk) {
+      return Failed("fallback: replaying the point's step " + std::to_string(s + 1) + " of " +
+                    std::to_string(history.size()) + " failed: " + step.at(0).reason);
+    }
+    state = std::move(step.at(0).state);
+  }
+  material::PointIncrement now;
+  now.displacement_gradient_increment = increment;
+  now.committed = state.get();
+  std::vector<material::PointResponse> answer = fallback_->Update({now}, want_tangent);
+  material::PointResponse response = std::move(answer.at(0));
+  if (response.status != material::UpdateStatus::kOk) {
+    response.reason = "fallback: " + response.reason;
+    return response;
+  }
+  auto next = std::make_unique<AnnState>();
+  next->stress_pa = response.stress_pa;
+  next->accumulated_strain =
+      committed.accumulated_strain +
+      material::StrainToVoigt(material::HughesWinget(increment).strain_increment);
+  next->history = Append(committed.history, increment);
+  next->flags = committed.flags + 1;
+  next->fallback = std::move(response.state);
+  next->fell_back_at_step = committed.steps();
+  response.state = std::move(next);
+  return response;
+}
+
+std::vector<material::PointResponse> AnnMaterial::Update(
+    const std::vector<material::PointIncrement>& increments, bool want_tangent) const {
+  std::vector<material::PointResponse> responses(increments.size());
+  std::vector<std::size_t> on_network, on_fallback;
+  std::vector<SurrogateInput> inputs;
+  std::vector<material::IncrementKinematics> kinematics;
+  for (std::size_t i = 0; i < increments.size(); ++i) {
+    const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
+    if (committed.fallback) {
+      on_fallback.push_back(i);
+      continue;
+    }
+    material::IncrementKinematics split =
+        material::HughesWinget(increments[i].displacement_gradient_increment);
+    if (!split.ok()) {
+      responses[i] = Failed(split.failure_reason);
+      continue;
+    }
+    SurrogateInput input;
+    input.strain_increment = material::StrainToVoigt(split.strain_increment);
+    input.stress_pa = material::StressToVoigt(committed.stress_pa);
+    input.accumulated_strain = committed.accumulated_strain;
+    on_network.push_back(i);
+    inputs.push_back(input);
+    kinematics.push_back(std::move(split));
+  }
+  const std::vector<EnsembleAnswer> answers = ensemble_->Answer(inputs, want_tangent);
+  for (std::size_t k = 0; k < on_network.size(); ++k) {
+    const std::size_t i = on_network[k];
+    const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
+    const EnsembleAnswer& answer = answers[k];
+    if (answer.out_of_distribution && options_.fallback_enabled) {
+      responses[i] = FallBack(committed, increments[i].displacement_gradient_increment,
+                              want_tangent);
+      if (responses[i].status == material::UpdateStatus::kOk) {
+        log_->RecordFallback({committed.steps(), answer.distance, answer.relative_spread});
+      }
+      continue;
+    }
+    if (answer.out_of_distribution) log_->RecordUnansweredFlag();
+    const Matrix3& rotation = kinematics[k].rotation;
+    auto next = std::make_unique<AnnState>();
+    next->stress_pa = rotation * committed.stress_pa * rotation.transpose() +
+                      material::VoigtToStress(answer.stress_increment_pa);
+    next->accumulated_strain = committed.accumulated_strain + inputs[k].strain_increment;
+    next->history = Append(committed.history, increments[i].displacement_gradient_increment);
+    next->flags = committed.flags + (answer.out_of_distribution ? 1 : 0);
+    material::PointResponse& response = responses[i];
+    response.status = material::UpdateStatus::kOk;
+    response.stress_pa = next->stress_pa;
+    response.has_tangent = want_tangent;
+    if (want_tangent) response.tangent_pa = answer.tangent_pa;
+    response.state = std::move(next);
+  }
+  if (!on_fallback.empty()) {
+    std::vector<material::PointIncrement> batch;
+    for (std::size_t i : on_fallback) {
+      const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
+      batch.push_back({increments[i].displacement_gradient_increment, committed.fallback.get()});
+    }
+    std::vector<material::PointResponse> real = fallback_->Update(batch, want_tangent);
+    for (std::size_t k = 0; k < on_fallback.size(); ++k) {
+      const std::size_t i = on_fallback[k];
+      const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
+      responses[i] = std::move(real[k]);
+      if (responses[i].status != material::UpdateStatus::kOk) continue;
+      auto next = std::make_unique<AnnState>();
+      next->stress_pa = responses[i].stress_pa;
+      next->accumulated_strain =
+          committed.accumulated_strain +
+          material::StrainToVoigt(
+              material::HughesWinget(increments[i].displacement_gradient_increment)
+                  .strain_increment);
+      next->history = Append(committed.history, increments[i].displacement_gradient_increment);
+      next->flags = committed.flags;
+      next->fallback = std::move(responses[i].state);
+      next->fell_back_at_step = committed.fell_back_at_step;
+      responses[i].state = std::move(next);
+    }
+  }
+  return responses;
+}
+
+}  // namespace gonogo::ann

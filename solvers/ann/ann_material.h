@@ -1,0 +1,111 @@
+// The surrogate at the constitutive seam: a ConstitutiveModel answered by a SurrogateEnsemble,
+// falling back to the real model (a DE RVE of the same soil) at a point the ensemble flags.
+//
+// A point's state: its stress, the strain accumulated since its start (the network's history
+// input), the displacement-gradient increments it has taken (so that a fallback can replay
+// them), and, once it has fallen back, the real model's state, which answers for it from then on
+// (a point does not return to the network: its history is now the real model's).
+//
+// Fallback: when the ensemble flags a point's increment (surrogate_ensemble.h) and the fallback
+// is enabled, a fresh state of the real model replays the point's increments from the start and
+// then takes this one; the point's stress jumps to what the real model says its history gives.
+// With the fallback disabled, the network answers anyway and the point counts the flag. A
+// committed state tells whether and when its point fell back (fell_back_at_step), which is what a
+// curve reports; the FallbackLog has every fallback and unanswered flag the material made,
+// including those of trial updates its caller then discarded (their cost, not their count of
+// points).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/surrogate_ensemble.h"
+#include "solvers/material/constitutive.h"
+
+namespace gonogo::ann {
+
+struct AnnMaterialOptions {
+  bool fallback_enabled = true;
+  // The stress of a fresh point when there is no fallback model to ask (Pa, tension positive).
+  Matrix3 initial_stress_pa = Matrix3::Zero();
+};
+
+// What the points of one material did, for a run's provenance. Thread-safe.
+class FallbackLog {
+ public:
+  struct Event {
+    std::int64_t point_step = 0;  // increments the point had taken when it fell back
+    double distance = 0;          // the flag's measures
+    double relative_spread = 0;
+  };
+  void RecordFallback(const Event& event);
+  void RecordUnansweredFlag();
+  std::vector<Event> fallbacks() const;
+  std::int64_t unanswered_flags() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<Event> fallbacks_;
+  std::int64_t unanswered_flags_ = 0;
+};
+
+// The increments a point has taken, newest first, shared between a state and the states made
+// from it (a step appends one node: no copy of the history per step).
+struct IncrementNode {
+  Matrix3 increment = Matrix3::Zero();
+  std::shared_ptr<const IncrementNode> previous;
+  std::int64_t count = 1;  // nodes from this one back to the first
+  ~IncrementNode();        // unlinks its chain iteratively (no deep recursion)
+};
+
+class AnnState : public material::MaterialState {
+ public:
+  std::unique_ptr<material::MaterialState> Clone() const override;
+  std::string Serialize() const override;
+  std::int64_t steps() const { return history ? history->count : 0; }
+  std::vector<Matrix3> Increments() const;  // oldest first
+
+  Matrix3 stress_pa = Matrix3::Zero();
+  Vector6 accumulated_strain = Vector6::Zero();  // engineering shears
+  std::shared_ptr<const IncrementNode> history;  // dH taken, for a fallback's replay
+  std::int64_t flags = 0;                        // increments the ensemble flagged
+  // Set once the point has fallen back: the real model's state answers from then on.
+  std::unique_ptr<material::MaterialState> fallback;
+  std::int64_t fell_back_at_step = -1;
+};
+
+class AnnMaterial : public material::ConstitutiveModel {
+ public:
+  // `fallback` may be null only with options.fallback_enabled false (InputError("fallback", ...)
+  // otherwise).
+  AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
+              std::shared_ptr<const material::ConstitutiveModel> fallback,
+              AnnMaterialOptions options = {});
+
+  std::string Name() const override { return "ann-surrogate"; }
+  std::unique_ptr<material::MaterialState> InitialState() const override;
+  // Throws InputError("material.state", ...) for bytes that are not an AnnState of this model.
+  std::unique_ptr<material::MaterialState> RestoreState(const std::string& bytes) const override;
+  // The network's points in one batched ensemble call; points on the fallback in one batched
+  // call of the real model; fallbacks replayed one point at a time.
+  std::vector<material::PointResponse> Update(const std::vector<material::PointIncrement>& increments,
+                                              bool want_tangent) const override;
+
+  const FallbackLog& log() const { return *log_; }
+  const SurrogateEnsemble& ensemble() const { return *ensemble_; }
+
+ private:
+  material::PointResponse FallBack(const AnnState& committed, const Matrix3& increment,
+                                   bool want_tangent) const;
+
+  std::shared_ptr<const SurrogateEnsemble> ensemble_;
+  std::shared_ptr<const material::ConstitutiveModel> fallback_;
+  AnnMaterialOptions options_;
+  Matrix3 initial_stress_pa_ = Matrix3::Zero();
+  std::shared_ptr<FallbackLog> log_ = std::make_shared<FallbackLog>();
+};
+
+}  // namespace gonogo::ann
