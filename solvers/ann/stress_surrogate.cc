@@ -278,7 +278,8 @@ StressSurrogate StressSurrogate::Load(const std::string& path) {
   return StressSurrogate(std::move(impl));
 }
 
-std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history) {
+std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
+                            const StrainHistory& history) {
   std::vector<Vector6> stresses;
   stresses.reserve(history.steps());
   SurrogateInput input;
@@ -286,11 +287,10 @@ std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistor
   for (std::size_t s = 0; s < history.steps(); ++s) {
     const material::IncrementKinematics kinematics = material::HughesWinget(history.increments[s]);
     input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
-    const Vector6 increment = surrogate.StressIncrements({input})[0];
     const Matrix3 before = material::VoigtToStress(input.stress_pa);
     const Vector6 after =
         material::StressToVoigt(kinematics.rotation * before * kinematics.rotation.transpose()) +
-        increment;
+        stress_increment(input);
     stresses.push_back(after);
     input.accumulated_strain += input.strain_increment;
     input.stress_pa = after;
@@ -298,15 +298,24 @@ std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistor
   return stresses;
 }
 
-double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history) {
-  const std::vector<Vector6> predicted = Replay(surrogate, history);
+std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history) {
+  return Replay(
+      [&](const SurrogateInput& input) { return surrogate.StressIncrements({input})[0]; },
+      history);
+}
+
+double ReplayError(const std::vector<Vector6>& replayed, const StrainHistory& history) {
   double error = 0, size = 0;
-  for (std::size_t s = 0; s < predicted.size(); ++s) {
-    error += (material::VoigtToStress(predicted[s]) -
+  for (std::size_t s = 0; s < replayed.size(); ++s) {
+    error += (material::VoigtToStress(replayed[s]) -
               material::VoigtToStress(history.stresses_pa[s])).norm();
     size += material::VoigtToStress(history.stresses_pa[s]).norm();
   }
   return size > 0 ? error / size : 0;
+}
+
+double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history) {
+  return ReplayError(Replay(surrogate, history), history);
 }
 
 }  // namespace gonogo::ann

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -90,13 +91,17 @@ class StressSurrogate {
 // The inputs a history gives, step by step, with the true stresses (for training and checks).
 std::vector<SurrogateInput> InputsOf(const StrainHistory& history);
 
-// The surrogate run along a history's increments from its initial stress, feeding back its own
-// stresses (as it runs in an FE point): the predicted stress after each step.
+// A surrogate (or an ensemble's mean) run along a history's increments from its initial stress,
+// feeding back its own stresses (as it runs in an FE point): the predicted stress after each step.
+using StressIncrementFunction = std::function<Vector6(const SurrogateInput&)>;
+std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
+                            const StrainHistory& history);
 std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history);
 
 // The replayed path's error relative to the path's own stress: mean over steps of
 // |sigma_predicted - sigma_true| over the mean over steps of |sigma_true| (Frobenius norms of
 // the tensors).
+double ReplayError(const std::vector<Vector6>& replayed, const StrainHistory& history);
 double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history);
 
 }  // namespace gonogo::ann

@@ -83,13 +83,17 @@ InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs) {
 
 SurrogateEnsemble SurrogateEnsemble::Train(const std::vector<StrainHistory>& histories,
                                            const MlpArchitecture& architecture,
-                                           const TrainingOptions& options, int members) {
+                                           const TrainingOptions& options, int members,
+                                           std::vector<TrainingReport>* reports) {
   if (members < 3 || members > 64) throw InputError("members", "must be in [3, 64]");
   SurrogateEnsemble ensemble;
   for (int k = 0; k < members; ++k) {
     TrainingOptions member_options = options;
     member_options.seed = options.seed + static_cast<std::uint64_t>(k);
-    ensemble.members_.push_back(StressSurrogate::Train(histories, architecture, member_options));
+    TrainingReport report;
+    ensemble.members_.push_back(
+        StressSurrogate::Train(histories, architecture, member_options, &report));
+    if (reports != nullptr) reports->push_back(report);
   }
   std::vector<SurrogateInput> inputs;
   for (const StrainHistory& history : histories) {
@@ -207,6 +211,18 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
     throw InputError("model", std::string("envelope.bin: ") + e.what());
   }
   return ensemble;
+}
+
+std::vector<Vector6> Replay(const SurrogateEnsemble& ensemble, const StrainHistory& history) {
+  return Replay(
+      [&](const SurrogateInput& input) {
+        return ensemble.Answer({input}, false)[0].stress_increment_pa;
+      },
+      history);
+}
+
+double ReplayError(const SurrogateEnsemble& ensemble, const StrainHistory& history) {
+  return ReplayError(Replay(ensemble, history), history);
 }
 
 }  // namespace gonogo::ann

@@ -52,9 +52,11 @@ class SurrogateEnsemble {
  public:
   // Trains `members` (at least 3) surrogates with seeds options.seed, +1, ... and fits the
   // envelope and the default thresholds on the histories' inputs.
+  // `reports` (if given) receives each member's training figures.
   static SurrogateEnsemble Train(const std::vector<StrainHistory>& histories,
                                  const MlpArchitecture& architecture,
-                                 const TrainingOptions& options, int members = 3);
+                                 const TrainingOptions& options, int members = 3,
+                                 std::vector<TrainingReport>* reports = nullptr);
 
   std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
                                      bool want_tangent) const;
@@ -79,5 +81,9 @@ class SurrogateEnsemble {
   double distance_threshold_ = 0;
   double spread_threshold_ = 0;
 };
+
+// The ensemble's mean run along a history (Replay of stress_surrogate.h), and its error.
+std::vector<Vector6> Replay(const SurrogateEnsemble& ensemble, const StrainHistory& history);
+double ReplayError(const SurrogateEnsemble& ensemble, const StrainHistory& history);
 
 }  // namespace gonogo::ann

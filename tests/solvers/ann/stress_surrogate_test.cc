@@ -18,47 +18,14 @@
 #include "solvers/ann/stress_surrogate.h"
 #include "solvers/common/errors.h"
 #include "solvers/material/drucker_prager.h"
+#include "tests/solvers/ann/drucker_prager_paths.h"
 
 namespace gonogo::ann {
 namespace {
 
-const material::DruckerPrager& Soil() {
-  static const material::DruckerPrager* soil = [] {
-    material::DruckerPragerParams params;
-    params.young_pa = 20e6;
-    params.poisson = 0.3;
-    params.cohesion_pa = 1e3;
-    params.friction_angle_deg = 35;
-    params.dilation_angle_deg = 5;
-    return new material::DruckerPrager(params);
-  }();
-  return *soil;
-}
-
-StrainHistory Path(LabPath path, double pressure_pa, double max_strain, std::uint64_t seed = 1) {
-  LabPathSpec spec;
-  spec.path = path;
-  spec.pressure_pa = pressure_pa;
-  spec.max_strain = max_strain;
-  spec.steps = 60;
-  spec.seed = seed;
-  spec.walk_step_strain = 5e-4;
-  StrainHistory history = RunLabPath(Soil(), spec);
-  EXPECT_TRUE(history.stopped_reason.empty()) << history.stopped_reason;
-  return history;
-}
-
-std::vector<StrainHistory> TrainingPaths() {
-  std::vector<StrainHistory> paths;
-  for (double p : {10e3, 20e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kTriaxial, p, 0.02));
-  for (double p : {10e3, 40e3, 80e3}) paths.push_back(Path(LabPath::kSimpleShear, p, 0.04));
-  for (double p : {10e3, 40e3}) paths.push_back(Path(LabPath::kUnloadReload, p, 0.02));
-  for (double p : {10e3, 80e3}) paths.push_back(Path(LabPath::kIsotropic, p, 0.004));
-  for (std::uint64_t seed = 1; seed <= 24; ++seed) {
-    paths.push_back(Path(LabPath::kRandomWalk, 10e3 * (1 + seed % 8), 0.004, seed));
-  }
-  return paths;
-}
+using testing::Path;
+using testing::Soil;
+using testing::TrainingPaths;
 
 const StressSurrogate& Trained(TrainingReport* report = nullptr) {
   static TrainingReport figures;

@@ -1,0 +1,21 @@
+#!/bin/sh
+# gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of
+# the architecture, and refuses a malformed architecture by name.
+set -eu
+ann="$1"
+out="$2"
+rm -rf "$out"
+mkdir -p "$out"
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 2 \
+  --architecture 8 --epochs 2 --threads 1 --out "$out" > "$out/figures.csv" 2> "$out/progress.txt"
+grep -q '^mlp-8-tanh,3,2,[0-9][0-9]*,' "$out/figures.csv"
+test -s "$out/training.npy"
+test -s "$out/held_out.npy.columns.txt"
+for k in 0 1 2; do test -s "$out/mlp-8-tanh/member_$k.pt"; done
+test -s "$out/mlp-8-tanh/envelope.bin"
+if "$ann" --architecture 8xq > /dev/null 2> "$out/error.txt"; then
+  echo "a malformed --architecture was accepted" >&2
+  exit 1
+fi
+grep -q -- '--architecture' "$out/error.txt"
+echo "ann_cli_test: ok"
