@@ -23,7 +23,6 @@
 
 #include "solvers/ann/lab_paths.h"
 #include "solvers/ann/surrogate_ensemble.h"
-#include "solvers/common/cli_checks.h"
 #include "solvers/common/errors.h"
 #include "solvers/dem/rve/rve_material.h"
 #include "solvers/dem/rve/rve_soil.h"
@@ -206,7 +205,6 @@ int Run(const CommandLine& line) {
 int main(int argc, char** argv) {
   CommandLine line;
   CLI::App app("gonogo-ann: the stress surrogate's study on a soil's own DE RVE");
-  const CLI::Validator finite = cli_checks::FiniteNumber();
   app.add_option("--soil", line.soil, "dem-hertz-mindlin soil of the catalogue")
       ->capture_default_str();
   app.add_option("--preset", line.preset, "fe-de preset whose RVE numerics the paths use")
@@ -230,7 +228,6 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app.add_option("--out", line.out, "directory for the histories (.npy) and the ensembles");
-  (void)finite;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
