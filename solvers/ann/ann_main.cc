@@ -6,7 +6,8 @@
 // Runs laboratory paths (lab_paths.h) on the soil's RVE, with the RVE numerics of the fe-de
 // preset: a training set (drained triaxials, simple shears, unload-reload and isotropic paths at
 // 5-40 kPa, and seeded random walks) and a held-out set (other pressures, other seeds), on
-// OpenMP threads, one path per thread. Trains an ensemble per --architecture and prints, per
+// OpenMP threads, one path per thread. Trains an ensemble per MLP --architecture (one network per
+// GRU: gru32) and prints, per
 // architecture, the training figures, each held-out path's replay error (the stress error
 // relative to the path's mean |sigma|) and the evaluation cost. With --out, writes the histories
 // (training.npy, held_out.npy with their .columns.txt) and each ensemble (DIR/<architecture>/).
@@ -132,6 +133,51 @@ MlpArchitecture ParseArchitecture(const std::string& text) {
   return architecture;
 }
 
+// The first `limit` training inputs: the batch an evaluation is timed on.
+std::vector<SurrogateInput> TimingBatch(const std::vector<StrainHistory>& training,
+                                        std::size_t limit) {
+  std::vector<SurrogateInput> batch;
+  for (const StrainHistory& history : training) {
+    for (const SurrogateInput& input : InputsOf(history)) {
+      if (batch.size() < limit) batch.push_back(input);
+    }
+  }
+  return batch;
+}
+
+// One GRU ("gru32": 32 hidden numbers per point), trained and measured as an ensemble member is.
+void RunRecurrent(const CommandLine& line, const std::string& text,
+                  const std::vector<StrainHistory>& training,
+                  const std::vector<StrainHistory>& held_out) {
+  int width = 0;
+  try {
+    width = std::stoi(text.substr(3));
+  } catch (const std::exception&) {
+    throw InputError("--architecture", "'" + text + "' is not gru and a width (gru32)");
+  }
+  TrainingOptions options;
+  options.epochs = line.epochs;
+  TrainingReport report;
+  const RecurrentStressSurrogate gru =
+      RecurrentStressSurrogate::Train(training, width, options, &report);
+  std::printf("%s,1,%d,%lld,%.1f,%.3g,", gru.architecture().c_str(), line.epochs,
+              static_cast<long long>(report.samples), report.seconds, report.final_loss);
+  for (const StrainHistory& history : held_out) {
+    std::printf("%.2f,", 100 * ReplayError(Replay(gru, history), history));
+  }
+  const std::vector<SurrogateInput> batch = TimingBatch(training, 1000);
+  std::vector<std::vector<double>> hidden;
+  const auto eval_start = std::chrono::steady_clock::now();
+  const int repeats = 5;
+  for (int r = 0; r < repeats; ++r) gru.Step(batch, &hidden);
+  std::printf("%.2f\n", 1e6 *
+                            std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                          eval_start).count() /
+                            (repeats * static_cast<double>(batch.size())));
+  std::fflush(stdout);
+  if (!line.out.empty()) gru.Save(line.out + "/" + gru.architecture() + ".pt");
+}
+
 int Run(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
@@ -163,6 +209,10 @@ int Run(const CommandLine& line) {
   for (const NamedPath& path : held_out_paths) std::printf("%s %%,", path.name.c_str());
   std::printf("us_per_point_batch_1000\n");
   for (const std::string& text : line.architectures) {
+    if (text.rfind("gru", 0) == 0) {
+      RunRecurrent(line, text, training, held_out);
+      continue;
+    }
     const MlpArchitecture architecture = ParseArchitecture(text);
     TrainingOptions options;
     options.epochs = line.epochs;
@@ -180,12 +230,7 @@ int Run(const CommandLine& line) {
     for (const StrainHistory& history : held_out) {
       std::printf("%.2f,", 100 * ReplayError(ensemble, history));
     }
-    std::vector<SurrogateInput> batch;
-    for (const StrainHistory& history : training) {
-      for (const SurrogateInput& input : InputsOf(history)) {
-        if (batch.size() < 1000) batch.push_back(input);
-      }
-    }
+    const std::vector<SurrogateInput> batch = TimingBatch(training, 1000);
     const auto eval_start = std::chrono::steady_clock::now();
     const int repeats = 5;
     for (int r = 0; r < repeats; ++r) ensemble.Answer(batch, false);
@@ -216,7 +261,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
   app.add_option("--architecture", line.architectures,
-                 "MLP hidden widths joined by x (64x64; the seed's 600x600x600x600x600x600x600)")
+                 "MLP hidden widths joined by x (64x64; the seed's 600x600x600x600x600x600x600), "
+                 "or a GRU and its width (gru32; one network, not an ensemble)")
       ->capture_default_str();
   app.add_option("--members", line.members, "ensemble members")
       ->check(CLI::Range(3, 64))

@@ -6,6 +6,7 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <map>
 #include <cmath>
 #include <sstream>
 
@@ -276,6 +277,208 @@ StressSurrogate StressSurrogate::Load(const std::string& path) {
                                   e.what_without_backtrace());
   }
   return StressSurrogate(std::move(impl));
+}
+
+namespace {
+
+constexpr int kRecurrentInputs = 12;
+
+// [d_eps, sigma_n] of each input: the GRU's raw inputs.
+torch::Tensor RecurrentInputTensor(const std::vector<SurrogateInput>& inputs) {
+  torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), kRecurrentInputs},
+                                 torch::kFloat64);
+  double* data = x.data_ptr<double>();
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    for (int c = 0; c < 6; ++c) {
+      data[n * kRecurrentInputs + c] = inputs[n].strain_increment[c];
+      data[n * kRecurrentInputs + 6 + c] = inputs[n].stress_pa[c];
+    }
+  }
+  return x;
+}
+
+// d_sigma = sigma_{n+1} - R sigma_n R^T of every step of a history.
+torch::Tensor StressIncrementTargets(const StrainHistory& history,
+                                     const std::vector<SurrogateInput>& inputs) {
+  torch::Tensor y = torch::empty({static_cast<std::int64_t>(inputs.size()), kOutputs},
+                                 torch::kFloat64);
+  double* data = y.data_ptr<double>();
+  for (std::size_t s = 0; s < inputs.size(); ++s) {
+    const Matrix3 rotation = material::HughesWinget(history.increments[s]).rotation;
+    const Matrix3 before = material::VoigtToStress(inputs[s].stress_pa);
+    const Vector6 target = history.stresses_pa[s] -
+                           material::StressToVoigt(rotation * before * rotation.transpose());
+    for (int c = 0; c < kOutputs; ++c) data[s * kOutputs + c] = target[c];
+  }
+  return y;
+}
+
+}  // namespace
+
+struct RecurrentStressSurrogate::Impl {
+  mutable torch::jit::Module module;
+  int hidden_width = 0;
+  std::string architecture;
+};
+
+RecurrentStressSurrogate::RecurrentStressSurrogate(std::unique_ptr<Impl> impl)
+    : impl_(std::move(impl)) {}
+RecurrentStressSurrogate::RecurrentStressSurrogate(RecurrentStressSurrogate&&) noexcept = default;
+RecurrentStressSurrogate& RecurrentStressSurrogate::operator=(RecurrentStressSurrogate&&) noexcept =
+    default;
+RecurrentStressSurrogate::~RecurrentStressSurrogate() = default;
+int RecurrentStressSurrogate::hidden_width() const { return impl_->hidden_width; }
+std::string RecurrentStressSurrogate::architecture() const { return impl_->architecture; }
+
+RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<StrainHistory>& histories,
+                                                         int hidden_width,
+                                                         const TrainingOptions& options,
+                                                         TrainingReport* report) {
+  if (hidden_width < 1 || hidden_width > 1024) {
+    throw InputError("hidden_width", "must be in [1, 1024]");
+  }
+  options.Validate("training.");
+  const auto start = std::chrono::steady_clock::now();
+  // Histories of equal length make one batch of sequences (time, batch, feature).
+  std::map<std::size_t, std::vector<std::pair<torch::Tensor, torch::Tensor>>> by_length;
+  std::vector<torch::Tensor> all_x, all_y;
+  for (const StrainHistory& history : histories) {
+    if (history.steps() == 0) continue;
+    const std::vector<SurrogateInput> inputs = InputsOf(history);
+    torch::Tensor x = RecurrentInputTensor(inputs);
+    torch::Tensor y = StressIncrementTargets(history, inputs);
+    all_x.push_back(x);
+    all_y.push_back(y);
+    by_length[history.steps()].emplace_back(x, y);
+  }
+  if (all_x.empty()) throw InputError("histories", "no steps to train on");
+  const torch::Tensor x_all = torch::cat(all_x), y_all = torch::cat(all_y);
+  if (!torch::isfinite(x_all).all().item<bool>() || !torch::isfinite(y_all).all().item<bool>()) {
+    throw InputError("histories", "a step holds a value that is not finite");
+  }
+  const auto [in_mean, in_scale] = Standardisation(x_all);
+  const auto [out_mean, out_scale] = Standardisation(y_all);
+  std::vector<std::pair<torch::Tensor, torch::Tensor>> batches;
+  for (const auto& [length, sequences] : by_length) {
+    std::vector<torch::Tensor> xs, ys;
+    for (const auto& [x, y] : sequences) {
+      xs.push_back(((x - in_mean) / in_scale).unsqueeze(1));
+      ys.push_back(((y - out_mean) / out_scale).unsqueeze(1));
+    }
+    batches.emplace_back(torch::cat(xs, 1), torch::cat(ys, 1));
+  }
+
+  torch::set_num_threads(options.threads);
+  torch::manual_seed(options.seed);
+  torch::nn::GRU gru(torch::nn::GRUOptions(kRecurrentInputs, hidden_width));
+  torch::nn::Linear head(hidden_width, kOutputs);
+  gru->to(torch::kFloat64);
+  head->to(torch::kFloat64);
+  std::vector<torch::Tensor> parameters = gru->parameters();
+  for (const torch::Tensor& p : head->parameters()) parameters.push_back(p);
+  torch::optim::Adam optimizer(parameters, torch::optim::AdamOptions(options.learning_rate));
+  TrainingReport figures;
+  figures.samples = x_all.size(0);
+  for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    for (double milestone : {0.5, 0.75, 0.9}) {
+      if (epoch == static_cast<int>(milestone * options.epochs) && epoch > 0) {
+        for (auto& group : optimizer.param_groups()) {
+          auto& adam = static_cast<torch::optim::AdamOptions&>(group.options());
+          adam.lr(adam.lr() * 0.5);
+        }
+      }
+    }
+    double loss_sum = 0, count = 0;
+    for (const auto& [x, y] : batches) {
+      optimizer.zero_grad();
+      const torch::Tensor hidden = std::get<0>(gru->forward(x));
+      const torch::Tensor loss = torch::mse_loss(head->forward(hidden), y);
+      loss.backward();
+      optimizer.step();
+      const double steps = static_cast<double>(x.size(0) * x.size(1));
+      loss_sum += loss.item<double>() * steps;
+      count += steps;
+    }
+    if (epoch == 0) figures.first_loss = loss_sum / count;
+    figures.final_loss = loss_sum / count;
+  }
+
+  auto impl = std::make_unique<Impl>();
+  impl->hidden_width = hidden_width;
+  impl->architecture = "gru-" + std::to_string(hidden_width);
+  torch::jit::Module module("RecurrentStressSurrogate");
+  auto gru_parameters = gru->named_parameters();
+  module.register_buffer("in_mean", in_mean.detach().clone());
+  module.register_buffer("in_scale", in_scale.detach().clone());
+  module.register_buffer("out_mean", out_mean.detach().clone());
+  module.register_buffer("out_scale", out_scale.detach().clone());
+  module.register_parameter("w_ih", gru_parameters["weight_ih_l0"].detach().clone(), false);
+  module.register_parameter("w_hh", gru_parameters["weight_hh_l0"].detach().clone(), false);
+  module.register_parameter("b_ih", gru_parameters["bias_ih_l0"].detach().clone(), false);
+  module.register_parameter("b_hh", gru_parameters["bias_hh_l0"].detach().clone(), false);
+  module.register_parameter("w_o", head->weight.detach().clone(), false);
+  module.register_parameter("b_o", head->bias.detach().clone(), false);
+  module.register_attribute("architecture", c10::StringType::get(), impl->architecture);
+  // PyTorch's GRU (gates r, z, n in that order in the stacked weights).
+  const std::string h = std::to_string(hidden_width), h2 = std::to_string(2 * hidden_width),
+                    h3 = std::to_string(3 * hidden_width);
+  module.define(
+      "def forward(self, x, h):\n"
+      "    z = (x - self.in_mean) / self.in_scale\n"
+      "    gi = torch.matmul(z, self.w_ih.t()) + self.b_ih\n"
+      "    gh = torch.matmul(h, self.w_hh.t()) + self.b_hh\n"
+      "    r = torch.sigmoid(gi[:, 0:" + h + "] + gh[:, 0:" + h + "])\n"
+      "    u = torch.sigmoid(gi[:, " + h + ":" + h2 + "] + gh[:, " + h + ":" + h2 + "])\n"
+      "    n = torch.tanh(gi[:, " + h2 + ":" + h3 + "] + r * gh[:, " + h2 + ":" + h3 + "])\n"
+      "    h_next = (1.0 - u) * n + u * h\n"
+      "    y = torch.matmul(h_next, self.w_o.t()) + self.b_o\n"
+      "    return y * self.out_scale + self.out_mean, h_next\n");
+  module.eval();
+  impl->module = std::move(module);
+  figures.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (report != nullptr) *report = figures;
+  return RecurrentStressSurrogate(std::move(impl));
+}
+
+std::vector<Vector6> RecurrentStressSurrogate::Step(const std::vector<SurrogateInput>& inputs,
+                                                    std::vector<std::vector<double>>* hidden) const {
+  const std::int64_t n = static_cast<std::int64_t>(inputs.size());
+  const int width = impl_->hidden_width;
+  if (hidden->size() != inputs.size()) hidden->assign(inputs.size(), std::vector<double>(width, 0.0));
+  torch::Tensor h = torch::empty({n, width}, torch::kFloat64);
+  for (std::int64_t k = 0; k < n; ++k) {
+    if (static_cast<int>((*hidden)[k].size()) != width) (*hidden)[k].assign(width, 0.0);
+    std::copy((*hidden)[k].begin(), (*hidden)[k].end(), h.data_ptr<double>() + k * width);
+  }
+  torch::NoGradGuard no_grad;
+  const auto outputs =
+      impl_->module.forward({RecurrentInputTensor(inputs), h}).toTuple()->elements();
+  const torch::Tensor y = outputs[0].toTensor().contiguous();
+  const torch::Tensor h_next = outputs[1].toTensor().contiguous();
+  std::vector<Vector6> increments(inputs.size());
+  for (std::int64_t k = 0; k < n; ++k) {
+    for (int c = 0; c < kOutputs; ++c) increments[k][c] = y.data_ptr<double>()[k * kOutputs + c];
+    std::copy(h_next.data_ptr<double>() + k * width, h_next.data_ptr<double>() + (k + 1) * width,
+              (*hidden)[k].begin());
+  }
+  return increments;
+}
+
+void RecurrentStressSurrogate::Save(const std::string& path) const {
+  try {
+    impl_->module.save(path);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot write the surrogate to " + path + ": " +
+                             e.what_without_backtrace());
+  }
+}
+
+std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
+                            const StrainHistory& history) {
+  std::vector<std::vector<double>> hidden;
+  return Replay(
+      [&](const SurrogateInput& input) { return surrogate.Step({input}, &hidden)[0]; }, history);
 }
 
 std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,

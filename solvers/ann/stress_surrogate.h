@@ -88,6 +88,40 @@ class StressSurrogate {
   std::unique_ptr<Impl> impl_;
 };
 
+// A recurrent surrogate: a GRU whose hidden state h (hidden_width numbers per point) is what the
+// point carries instead of the accumulated strain, so that it can learn whatever of its history
+// matters (a packing's fabric as well as its density):
+//   h_{n+1} = GRU([d_eps, sigma_n], h_n),   d_sigma = W h_{n+1} + b,   h_0 = 0,
+// standardised inputs and outputs as StressSurrogate's. Trained on whole histories (teacher forcing:
+// sigma_n the recorded stress), all steps of a history in one sequence, histories of equal length
+// batched together. Saved as TorchScript with forward(x (N, 12), h (N, H)) -> (d_sigma, h_next).
+class RecurrentStressSurrogate {
+ public:
+  RecurrentStressSurrogate(RecurrentStressSurrogate&&) noexcept;
+  RecurrentStressSurrogate& operator=(RecurrentStressSurrogate&&) noexcept;
+  ~RecurrentStressSurrogate();
+
+  // Throws InputError("hidden_width", ...) outside [1, 1024] and as StressSurrogate::Train.
+  static RecurrentStressSurrogate Train(const std::vector<StrainHistory>& histories,
+                                        int hidden_width, const TrainingOptions& options,
+                                        TrainingReport* report = nullptr);
+  int hidden_width() const;
+  // One step of a batch of points: d_sigma, and each point's hidden state advanced in place.
+  std::vector<Vector6> Step(const std::vector<SurrogateInput>& inputs,
+                            std::vector<std::vector<double>>* hidden) const;
+  void Save(const std::string& path) const;
+  std::string architecture() const;  // "gru-32"
+
+ private:
+  struct Impl;
+  explicit RecurrentStressSurrogate(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The GRU run along a history from h_0 = 0, feeding back its own stresses; and its error.
+std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
+                            const StrainHistory& history);
+
 // The inputs a history gives, step by step, with the true stresses (for training and checks).
 std::vector<SurrogateInput> InputsOf(const StrainHistory& history);
 

@@ -180,5 +180,75 @@ TEST(StressSurrogate, TrainingIsReproducibleAndRefusesNothingToLearn) {
   EXPECT_THROW(StressSurrogate::Train(paths, MlpArchitecture{}, options), InputError);
 }
 
+// The GRU: trained on the same paths it learns (the loss falls tenfold), it steps a batch as it
+// steps each point alone, carries its hidden state per point, and Python's torch runs the saved
+// module to the same d_sigma and hidden state.
+TEST(RecurrentStressSurrogate, TrainsStepsPerPointAndLoadsInPython) {
+  TrainingOptions options;
+  options.epochs = 400;
+  TrainingReport report;
+  const RecurrentStressSurrogate gru =
+      RecurrentStressSurrogate::Train(TrainingPaths(), 16, options, &report);
+  const StrainHistory held_out = Path(LabPath::kTriaxial, 30e3, 0.02);
+  std::cout << "  " << gru.architecture() << ": loss " << report.first_loss << " -> "
+            << report.final_loss << ", " << report.seconds << " s; held-out triaxial replay "
+            << 100 * ReplayError(Replay(gru, held_out), held_out) << " %\n";
+  EXPECT_EQ(gru.architecture(), "gru-16");
+  EXPECT_LT(report.final_loss, 0.1 * report.first_loss);
+
+  const std::vector<SurrogateInput> a = InputsOf(held_out);
+  const std::vector<SurrogateInput> b = InputsOf(Path(LabPath::kSimpleShear, 20e3, 0.04));
+  std::vector<std::vector<double>> together, alone_a, alone_b;
+  for (int s = 0; s < 10; ++s) {
+    const std::vector<Vector6> both = gru.Step({a[s], b[s]}, &together);
+    const Vector6 only_a = gru.Step({a[s]}, &alone_a)[0];
+    const Vector6 only_b = gru.Step({b[s]}, &alone_b)[0];
+    EXPECT_LT((both[0] - only_a).norm(), 1e-9 * (1 + only_a.norm())) << s;
+    EXPECT_LT((both[1] - only_b).norm(), 1e-9 * (1 + only_b.norm())) << s;
+  }
+  EXPECT_NE(together[0], together[1]) << "each point has its own hidden state";
+  ASSERT_EQ(together[0].size(), 16u);
+
+  const std::filesystem::path directory =
+      std::filesystem::temp_directory_path() / ("gonogo_gru_" + std::to_string(getpid()));
+  std::filesystem::create_directories(directory);
+  const std::string model = (directory / "gru.pt").string();
+  gru.Save(model);
+  std::vector<std::vector<double>> hidden;
+  const Vector6 first = gru.Step({a[0]}, &hidden)[0];
+  const Vector6 second = gru.Step({a[1]}, &hidden)[0];
+  {
+    std::ofstream table(directory / "inputs.csv");
+    table.precision(17);
+    for (int s = 0; s < 2; ++s) {
+      for (int c = 0; c < 6; ++c) table << a[s].strain_increment[c] << ",";
+      for (int c = 0; c < 6; ++c) table << a[s].stress_pa[c] << (c == 5 ? "\n" : ",");
+    }
+  }
+  std::ofstream(directory / "run.py")
+      << "import sys, numpy, torch\n"
+         "model = torch.jit.load(sys.argv[1])\n"
+         "x = torch.from_numpy(numpy.loadtxt(sys.argv[2], delimiter=',', ndmin=2))\n"
+         "h = torch.zeros(1, 16, dtype=torch.float64)\n"
+         "for k in range(2):\n"
+         "    y, h = model(x[k:k + 1], h)\n"
+         "    print(' '.join(repr(float(v)) for v in y[0]))\n";
+  const std::string out = (directory / "python.out").string();
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + (directory / "run.py").string() + " " + model +
+                         " " + (directory / "inputs.csv").string() + " > " + out + " 2>&1")
+                            .c_str()),
+            0);
+  std::ifstream printed(out);
+  for (const Vector6& expected : {first, second}) {
+    for (int c = 0; c < 6; ++c) {
+      double value = 0;
+      ASSERT_TRUE(printed >> value);
+      EXPECT_NEAR(value, expected[c], 1e-9 * (1 + std::abs(expected[c]))) << c;
+    }
+  }
+  std::filesystem::remove_all(directory);
+  EXPECT_THROW(RecurrentStressSurrogate::Train(TrainingPaths(), 0, options), InputError);
+}
+
 }  // namespace
 }  // namespace gonogo::ann
