@@ -123,9 +123,13 @@ MlpArchitecture ParseArchitecture(const std::string& text) {
   std::stringstream widths(text);
   std::string width;
   while (std::getline(widths, width, 'x')) {
+    std::size_t used = 0;
     try {
-      architecture.hidden_widths.push_back(std::stoi(width));
+      architecture.hidden_widths.push_back(std::stoi(width, &used));
     } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != width.size()) {
       throw InputError("--architecture", "'" + text + "' is not widths joined by x (64x64)");
     }
   }
@@ -146,15 +150,20 @@ std::vector<SurrogateInput> TimingBatch(const std::vector<StrainHistory>& traini
 }
 
 // One GRU ("gru32": 32 hidden numbers per point), trained and measured as an ensemble member is.
+int GruWidth(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const int width = std::stoi(text.substr(3), &used);
+    if (used == text.size() - 3 && width >= 1 && width <= 1024) return width;
+  } catch (const std::exception&) {
+  }
+  throw InputError("--architecture", "'" + text + "' is not gru and a width in [1, 1024] (gru32)");
+}
+
 void RunRecurrent(const CommandLine& line, const std::string& text,
                   const std::vector<StrainHistory>& training,
                   const std::vector<StrainHistory>& held_out) {
-  int width = 0;
-  try {
-    width = std::stoi(text.substr(3));
-  } catch (const std::exception&) {
-    throw InputError("--architecture", "'" + text + "' is not gru and a width (gru32)");
-  }
+  const int width = GruWidth(text);
   TrainingOptions options;
   options.epochs = line.epochs;
   TrainingReport report;
@@ -182,6 +191,13 @@ int Run(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
   if (entry == nullptr) throw InputError("--soil", "no dem-hertz-mindlin soil '" + line.soil + "'");
+  for (const std::string& text : line.architectures) {  // refused before any path runs
+    if (text.rfind("gru", 0) == 0) {
+      GruWidth(text);
+    } else {
+      ParseArchitecture(text);
+    }
+  }
   const tiers::FeDeOptions preset = tiers::FeDeOptions::Preset(line.preset);
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));

@@ -1,6 +1,6 @@
 #!/bin/sh
 # gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of
-# the architecture, and refuses a malformed architecture by name.
+# the architecture, and refuses malformed architectures by name before running any path.
 set -eu
 ann="$1"
 out="$2"
@@ -13,9 +13,11 @@ test -s "$out/training.npy"
 test -s "$out/held_out.npy.columns.txt"
 for k in 0 1 2; do test -s "$out/mlp-8-tanh/member_$k.pt"; done
 test -s "$out/mlp-8-tanh/envelope.bin"
-if "$ann" --architecture 8xq > /dev/null 2> "$out/error.txt"; then
-  echo "a malformed --architecture was accepted" >&2
-  exit 1
-fi
-grep -q -- '--architecture' "$out/error.txt"
+for bad in 8xq 64a gruq; do
+  if "$ann" --architecture "$bad" > /dev/null 2> "$out/error.txt"; then
+    echo "--architecture $bad was accepted" >&2
+    exit 1
+  fi
+  grep -q -- "--architecture: '$bad'" "$out/error.txt"
+done
 echo "ann_cli_test: ok"
