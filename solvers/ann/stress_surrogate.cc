@@ -18,18 +18,41 @@ namespace {
 constexpr int kInputs = 18;
 constexpr int kOutputs = 6;
 
-torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs) {
-  torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), kInputs},
+// The raw inputs, one row per point: [d_eps, sigma_n, eps_n] (18 columns), or without eps_n (12,
+// the recurrent surrogate's, whose hidden state stands in for it).
+torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, int columns = kInputs) {
+  torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), columns},
                                  torch::kFloat64);
   double* data = x.data_ptr<double>();
   for (std::size_t n = 0; n < inputs.size(); ++n) {
     for (int c = 0; c < 6; ++c) {
-      data[n * kInputs + c] = inputs[n].strain_increment[c];
-      data[n * kInputs + 6 + c] = inputs[n].stress_pa[c];
-      data[n * kInputs + 12 + c] = inputs[n].accumulated_strain[c];
+      data[n * columns + c] = inputs[n].strain_increment[c];
+      data[n * columns + 6 + c] = inputs[n].stress_pa[c];
+      if (columns == kInputs) data[n * columns + 12 + c] = inputs[n].accumulated_strain[c];
     }
   }
   return x;
+}
+
+// Adam's learning rate halved at 50, 75 and 90 % of the epochs.
+void HalveLearningRateAtMilestones(torch::optim::Adam& optimizer, int epoch, int epochs) {
+  for (double milestone : {0.5, 0.75, 0.9}) {
+    if (epoch == static_cast<int>(milestone * epochs) && epoch > 0) {
+      for (auto& group : optimizer.param_groups()) {
+        auto& adam = static_cast<torch::optim::AdamOptions&>(group.options());
+        adam.lr(adam.lr() * 0.5);
+      }
+    }
+  }
+}
+
+void SaveModule(torch::jit::Module& module, const std::string& path) {
+  try {
+    module.save(path);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("cannot write the surrogate to " + path + ": " +
+                             e.what_without_backtrace());
+  }
 }
 
 // Column means and standard deviations; a constant column gets scale 1 (it carries nothing).
@@ -181,14 +204,7 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
   TrainingReport figures;
   figures.samples = samples;
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
-    for (double milestone : {0.5, 0.75, 0.9}) {
-      if (epoch == static_cast<int>(milestone * options.epochs) && epoch > 0) {
-        for (auto& group : optimizer.param_groups()) {
-          auto& adam = static_cast<torch::optim::AdamOptions&>(group.options());
-          adam.lr(adam.lr() * 0.5);
-        }
-      }
-    }
+    HalveLearningRateAtMilestones(optimizer, epoch, options.epochs);
     const torch::Tensor order = torch::randperm(samples, torch::kInt64);
     double loss_sum = 0;
     for (std::int64_t begin = 0; begin < samples; begin += options.batch_size) {
@@ -258,13 +274,7 @@ std::vector<Vector6> StressSurrogate::StressIncrements(const std::vector<Surroga
   return increments;
 }
 
-void StressSurrogate::Save(const std::string& path) const {
-  try {
-    impl_->module.save(path);
-  } catch (const c10::Error& e) {
-    throw std::runtime_error("cannot write the surrogate to " + path + ": " + e.what_without_backtrace());
-  }
-}
+void StressSurrogate::Save(const std::string& path) const { SaveModule(impl_->module, path); }
 
 StressSurrogate StressSurrogate::Load(const std::string& path) {
   auto impl = std::make_unique<Impl>();
@@ -283,18 +293,8 @@ namespace {
 
 constexpr int kRecurrentInputs = 12;
 
-// [d_eps, sigma_n] of each input: the GRU's raw inputs.
 torch::Tensor RecurrentInputTensor(const std::vector<SurrogateInput>& inputs) {
-  torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), kRecurrentInputs},
-                                 torch::kFloat64);
-  double* data = x.data_ptr<double>();
-  for (std::size_t n = 0; n < inputs.size(); ++n) {
-    for (int c = 0; c < 6; ++c) {
-      data[n * kRecurrentInputs + c] = inputs[n].strain_increment[c];
-      data[n * kRecurrentInputs + 6 + c] = inputs[n].stress_pa[c];
-    }
-  }
-  return x;
+  return InputTensor(inputs, kRecurrentInputs);
 }
 
 // d_sigma = sigma_{n+1} - R sigma_n R^T of every step of a history.
@@ -380,14 +380,7 @@ RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<Strai
   TrainingReport figures;
   figures.samples = x_all.size(0);
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
-    for (double milestone : {0.5, 0.75, 0.9}) {
-      if (epoch == static_cast<int>(milestone * options.epochs) && epoch > 0) {
-        for (auto& group : optimizer.param_groups()) {
-          auto& adam = static_cast<torch::optim::AdamOptions&>(group.options());
-          adam.lr(adam.lr() * 0.5);
-        }
-      }
-    }
+    HalveLearningRateAtMilestones(optimizer, epoch, options.epochs);
     double loss_sum = 0, count = 0;
     for (const auto& [x, y] : batches) {
       optimizer.zero_grad();
@@ -466,12 +459,7 @@ std::vector<Vector6> RecurrentStressSurrogate::Step(const std::vector<SurrogateI
 }
 
 void RecurrentStressSurrogate::Save(const std::string& path) const {
-  try {
-    impl_->module.save(path);
-  } catch (const c10::Error& e) {
-    throw std::runtime_error("cannot write the surrogate to " + path + ": " +
-                             e.what_without_backtrace());
-  }
+  SaveModule(impl_->module, path);
 }
 
 std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
