@@ -20,6 +20,23 @@ std::shared_ptr<const IncrementNode> Append(std::shared_ptr<const IncrementNode>
   return node;
 }
 
+// The state after one increment: the committed state's counters carried on, the increment
+// appended to its history and its strain (Voigt, engineering shears) to its accumulated strain.
+std::unique_ptr<AnnState> Advance(const AnnState& committed, const Matrix3& increment,
+                                  const Vector6& strain_increment, const Matrix3& stress_pa) {
+  auto next = std::make_unique<AnnState>();
+  next->stress_pa = stress_pa;
+  next->accumulated_strain = committed.accumulated_strain + strain_increment;
+  next->history = Append(committed.history, increment);
+  next->flags = committed.flags;
+  next->fell_back_at_step = committed.fell_back_at_step;
+  return next;
+}
+
+Vector6 StrainIncrementOf(const Matrix3& increment) {
+  return material::StrainToVoigt(material::HughesWinget(increment).strain_increment);
+}
+
 material::PointResponse Failed(const std::string& reason) {
   material::PointResponse response;
   response.status = material::UpdateStatus::kFailed;
@@ -177,12 +194,8 @@ material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const M
     response.reason = "fallback: " + response.reason;
     return response;
   }
-  auto next = std::make_unique<AnnState>();
-  next->stress_pa = response.stress_pa;
-  next->accumulated_strain =
-      committed.accumulated_strain +
-      material::StrainToVoigt(material::HughesWinget(increment).strain_increment);
-  next->history = Append(committed.history, increment);
+  std::unique_ptr<AnnState> next =
+      Advance(committed, increment, StrainIncrementOf(increment), response.stress_pa);
   next->flags = committed.flags + 1;
   next->fallback = std::move(response.state);
   next->fell_back_at_step = committed.steps();
@@ -231,12 +244,12 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     }
     if (answer.out_of_distribution) log_->RecordUnansweredFlag();
     const Matrix3& rotation = kinematics[k].rotation;
-    auto next = std::make_unique<AnnState>();
-    next->stress_pa = rotation * committed.stress_pa * rotation.transpose() +
-                      material::VoigtToStress(answer.stress_increment_pa);
-    next->accumulated_strain = committed.accumulated_strain + inputs[k].strain_increment;
-    next->history = Append(committed.history, increments[i].displacement_gradient_increment);
-    next->flags = committed.flags + (answer.out_of_distribution ? 1 : 0);
+    std::unique_ptr<AnnState> next =
+        Advance(committed, increments[i].displacement_gradient_increment,
+                inputs[k].strain_increment,
+                rotation * committed.stress_pa * rotation.transpose() +
+                    material::VoigtToStress(answer.stress_increment_pa));
+    next->flags += answer.out_of_distribution ? 1 : 0;
     material::PointResponse& response = responses[i];
     response.status = material::UpdateStatus::kOk;
     response.stress_pa = next->stress_pa;
@@ -256,17 +269,10 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
       responses[i] = std::move(real[k]);
       if (responses[i].status != material::UpdateStatus::kOk) continue;
-      auto next = std::make_unique<AnnState>();
-      next->stress_pa = responses[i].stress_pa;
-      next->accumulated_strain =
-          committed.accumulated_strain +
-          material::StrainToVoigt(
-              material::HughesWinget(increments[i].displacement_gradient_increment)
-                  .strain_increment);
-      next->history = Append(committed.history, increments[i].displacement_gradient_increment);
-      next->flags = committed.flags;
+      const Matrix3& increment = increments[i].displacement_gradient_increment;
+      std::unique_ptr<AnnState> next = Advance(committed, increment, StrainIncrementOf(increment),
+                                               responses[i].stress_pa);
       next->fallback = std::move(responses[i].state);
-      next->fell_back_at_step = committed.fell_back_at_step;
       responses[i].state = std::move(next);
     }
   }
