@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -149,6 +150,15 @@ std::vector<SurrogateInput> TimingBatch(const std::vector<StrainHistory>& traini
   return batch;
 }
 
+// Wall microseconds per point of `evaluate_batch` (a batch of `points`), over 5 calls.
+double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& evaluate_batch) {
+  const int repeats = 5;
+  const auto start = std::chrono::steady_clock::now();
+  for (int r = 0; r < repeats; ++r) evaluate_batch();
+  return 1e6 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
+         (repeats * static_cast<double>(points));
+}
+
 // One GRU ("gru32": 32 hidden numbers per point), trained and measured as an ensemble member is.
 int GruWidth(const std::string& text) {
   try {
@@ -176,13 +186,7 @@ void RunRecurrent(const CommandLine& line, const std::string& text,
   }
   const std::vector<SurrogateInput> batch = TimingBatch(training, 1000);
   std::vector<std::vector<double>> hidden;
-  const auto eval_start = std::chrono::steady_clock::now();
-  const int repeats = 5;
-  for (int r = 0; r < repeats; ++r) gru.Step(batch, &hidden);
-  std::printf("%.2f\n", 1e6 *
-                            std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                          eval_start).count() /
-                            (repeats * static_cast<double>(batch.size())));
+  std::printf("%.2f\n", MicrosecondsPerPoint(batch.size(), [&] { gru.Step(batch, &hidden); }));
   std::fflush(stdout);
   if (!line.out.empty()) gru.Save(line.out + "/" + gru.architecture() + ".pt");
 }
@@ -247,14 +251,8 @@ int Run(const CommandLine& line) {
       std::printf("%.2f,", 100 * ReplayError(ensemble, history));
     }
     const std::vector<SurrogateInput> batch = TimingBatch(training, 1000);
-    const auto eval_start = std::chrono::steady_clock::now();
-    const int repeats = 5;
-    for (int r = 0; r < repeats; ++r) ensemble.Answer(batch, false);
-    const double eval_us = 1e6 *
-                           std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                         eval_start).count() /
-                           (repeats * static_cast<double>(batch.size()));
-    std::printf("%.2f\n", eval_us);
+    std::printf("%.2f\n",
+                MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
     std::fflush(stdout);
     if (!line.out.empty()) ensemble.Save(line.out + "/" + architecture.Describe());
   }
