@@ -65,7 +65,15 @@ std::string CurveKey(const std::string& tier, const std::string& tier_version,
     if (i) key += ',';
     key += Fixed(q.slips[i], 6);
   }
+  // Only a tier with surrogate models has one (fe-ann); every other key is as it was.
+  if (!q.surrogate_model.empty()) key += ";model=" + q.surrogate_model;
   return key;
+}
+
+std::string SurrogateModelOfKey(const std::string& key) {
+  const std::string field = ";model=";
+  const std::size_t at = key.rfind(field);
+  return at == std::string::npos ? std::string() : key.substr(at + field.size());
 }
 
 std::string SimilarityGroup(const std::string& tier, const std::string& tier_version,
@@ -78,6 +86,7 @@ std::string SimilarityGroup(const std::string& tier, const std::string& tier_ver
     if (i) group += ',';
     group += Fixed(q.slips[i], 6);
   }
+  if (!q.surrogate_model.empty()) group += ";model=" + q.surrogate_model;
   return group;
 }
 

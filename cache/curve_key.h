@@ -34,6 +34,9 @@ TractionRequest Quantise(const TractionRequest& request);
 std::string CurveKey(const std::string& tier, const std::string& tier_version,
                      const TractionRequest& quantised);
 
+// The surrogate model a key names (its ";model=" field, last when present); "" for none.
+std::string SurrogateModelOfKey(const std::string& key);
+
 // Everything a curve depends on except the tyre's size and its load: curves in one group are on
 // the same soil with the same procedure, so they can stand in for each other when their pi-terms
 // match (solvers/mobility/similarity.h).

@@ -66,6 +66,7 @@ StoredCurve ReadRow(const Statement& s) {
   c.request.soil.parameters = ParseStoredParameters(s.Text(16));
   c.request.tyre.inflation_pressure_pa = s.Double(17);
   c.curve.immobile_reason = s.Text(18);
+  c.request.surrogate_model = SurrogateModelOfKey(c.cache_key);  // (the key is its only record)
   return c;
 }
 

@@ -33,5 +33,6 @@ Command AddScalabilityCommand(CLI::App& parent);
 // What the server offers (cli_catalogue.cc).
 Command AddTiersCommand(CLI::App& parent);
 Command AddSoilsCommand(CLI::App& parent);
+Command AddModelsCommand(CLI::App& parent);
 
 }  // namespace gonogo::cli

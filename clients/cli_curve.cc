@@ -24,6 +24,7 @@ struct CurveOptions {
   bool no_similarity = false;
   bool job = false;
   bool no_wait = false;
+  std::string surrogate_model;  // fe-ann; empty: the soil's best
 };
 
 struct ScalabilityOptions {
@@ -99,6 +100,7 @@ void PrintCurveHeading(const v1::TractionCurve& curve) {
   if (curve.soil().cone_index_pa() > 0) {
     std::cout << "cone index " << curve.soil().cone_index_pa() / 1000 << " kPa, ";
   }
+  if (!p.surrogate_model().empty()) std::cout << "surrogate model " << p.surrogate_model() << ", ";
   std::cout << (p.cache_hit() ? "from the cache" : "computed") << " by " << p.computed_by() << "\n";
   if (p.similarity_hit()) {
     const auto& r = p.reliability();
@@ -129,6 +131,7 @@ int RunCurve(Client& client, const CurveOptions& o) {
   *req.mutable_soil() = SoilFromOptions(o.soil);
   req.set_slip_step(o.slip_step);
   req.set_disable_similarity(o.no_similarity);
+  req.set_surrogate_model(o.surrogate_model);
   double load = 0;
   WheelFromOptions(o.wheel, req.mutable_tyre(), &load);
   req.set_wheel_load_n(load);
@@ -253,6 +256,10 @@ Command AddCurveCommand(CLI::App& parent) {
                   "tractive_efficiency, gross_traction_n, motion_resistance_n");
   curve->add_flag("--no-similarity", o->no_similarity,
                   "answer only from an exact cache key or fresh computation");
+  curve->add_option("--model", o->surrogate_model,
+                    "fe-ann: the surrogate model (gonogo models lists them); default: the soil's "
+                    "best")
+      ->type_name("ID");
   curve->add_flag("--job", o->job, "run as a job with a progress bar, whatever the tier");
   curve->add_flag("--no-wait", o->no_wait, "when the curve runs as a job: print its id, return");
   return {curve, [o](Client& client) { return RunCurve(client, *o); }};

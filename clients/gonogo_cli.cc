@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
   const std::vector<Command> commands = {
       AddMapCommand(app),         AddJobsCommand(app),     AddWatchCommand(app),
       AddCancelCommand(app),      AddDownloadCommand(app), AddCurveCommand(app),
-      AddScalabilityCommand(app), AddTiersCommand(app),    AddSoilsCommand(app)};
+      AddScalabilityCommand(app), AddTiersCommand(app),    AddSoilsCommand(app),
+      AddModelsCommand(app)};
   // After the subcommands: they would inherit it.
   app.footer(
       "Run gonogo COMMAND --help for a command's options.\n"

@@ -50,6 +50,7 @@ TractionRequest FromProto(const v1::GetTractionCurveRequest& request) {
   r.wheel_load_n = request.wheel_load_n();
   r.soil = FromProto(request.soil());
   r.slips = TractionRequest::SlipSweep(request.slip_step() == 0 ? 0.05 : request.slip_step());
+  r.surrogate_model = request.surrogate_model();
   return r;
 }
 
@@ -140,6 +141,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   *r->mutable_tyre() = ToProto(t.request.tyre);
   r->set_wheel_load_n(t.request.wheel_load_n);
   *r->mutable_soil() = ToProto(t.request.soil);
+  r->set_surrogate_model(t.request.surrogate_model);
   for (double s : t.request.slips) w.add_slips(s);
   w.set_threads(t.needs.threads);
   w.set_checkpoint_dir(t.checkpoint_dir);
@@ -154,6 +156,7 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.request.tyre = FromProto(w.request().tyre());
   t.request.wheel_load_n = w.request().wheel_load_n();
   t.request.soil = FromProto(w.request().soil());
+  t.request.surrogate_model = w.request().surrogate_model();
   t.request.slips.assign(w.slips().begin(), w.slips().end());
   t.needs.ranks = std::max(1, w.group_ranks_size());
   t.needs.threads = std::max(1, w.threads());
@@ -183,7 +186,7 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   r.ok = w.ok();
   r.cancelled = w.cancelled();
   r.error = w.error();
-  r.error_kind = w.error_kind() >= 0 && w.error_kind() <= static_cast<int32_t>(ErrorKind::kInternal)
+  r.error_kind = w.error_kind() >= 0 && w.error_kind() <= static_cast<int32_t>(ErrorKind::kPrecondition)
                      ? static_cast<ErrorKind>(w.error_kind())
                      : ErrorKind::kInternal;
   if (!r.ok && r.error_kind == ErrorKind::kNone) r.error_kind = ErrorKind::kInternal;

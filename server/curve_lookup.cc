@@ -62,6 +62,7 @@ void FillCurve(const TractionRequest& request, const TractionCurve& curve,
   prov->set_computed_by(source.computed_by);
   prov->set_compute_seconds(source.compute_seconds);
   prov->set_computed_unix_ms(source.computed_unix_ms);
+  prov->set_surrogate_model(source.request.surrogate_model);
 }
 
 void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {

@@ -51,6 +51,7 @@ CurveTask CurveResolver::Prepare(const TractionTier& tier, TractionRequest reque
   request.soil = SoilForTier(tier, std::move(request.soil));
   request.Validate();
   tier.ValidateSoil(request.soil, soil_field);
+  tier.ResolveChoices(request, "");
   CurveTask task;
   task.request = cache::Quantise(request);
   task.request.Validate();

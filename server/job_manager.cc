@@ -116,9 +116,18 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
             "the " + tier.Name() + " tier needs a soil-class raster and a soil table that names "
             "library soils or gives their parameters");
     for (const auto& [code, info] : soil_table) {
-      tier.ValidateSoil(SoilState{0, info.name, info.parameters},
-                        "soil_table.classes[code " + std::to_string(code) + "]");
+      const std::string field = "soil_table.classes[code " + std::to_string(code) + "]";
+      tier.ValidateSoil(SoilState{0, info.name, info.parameters}, field);
+      // A soil the tier has no model for is refused now, not when its curve comes up.
+      TractionRequest probe;
+      probe.soil = SoilState{0, info.name, info.parameters};
+      probe.surrogate_model = request.surrogate_model();
+      tier.ResolveChoices(probe, "");
     }
+  } else {
+    TractionRequest probe;
+    probe.surrogate_model = request.surrogate_model();
+    tier.ResolveChoices(probe, "");
   }
 
   geo::TerrainInputs t;
@@ -344,7 +353,8 @@ void JobManager::RunJob(const std::string& id) {
     const auto slips = TractionRequest::SlipSweep(criteria.slip_step);
 
     report("planning terrain units", false);
-    const MapPlan plan = PlanMap(*terrain, vehicle, SoilTableOf(request.soil_table()), tier, slips);
+    const MapPlan plan = PlanMap(*terrain, vehicle, SoilTableOf(request.soil_table()), tier, slips,
+                                 request.surrogate_model());
     const size_t total = plan.tasks.size();
     std::vector<TractionCurve> curves(total);
     size_t done = 0, hits = 0, similar = 0;

@@ -32,6 +32,7 @@
 #include "server/thread_pool.h"
 #include "solvers/tiers/builtin_tiers.h"
 #include "solvers/tiers/diagnostic_tiers.h"
+#include "solvers/tiers/surrogate_registry.h"
 
 namespace {
 
@@ -72,9 +73,9 @@ Options Parse(int argc, char** argv) {
   app.add_option("--task-delay-ms", o.task_delay_ms,
                  "delay every traction task by this many ms (fault-injection tests and demos)");
   app.add_option("--fe-de-preset", o.tier_options.fe_de_preset,
-                 "fe-de configuration: default (seed 001 procedure, R/4 mesh; hours) or ci (coarse "
-                 "and short; minutes)")
-      ->check(CLI::IsMember({"default", "ci"}));
+                 "fe-de configuration: default (seed 001 procedure, R/4 mesh; hours), ci (coarse "
+                 "and short; minutes) or tiny (ci cut to 0.45 s; under a minute)")
+      ->check(CLI::IsMember({"default", "ci", "tiny"}));
   app.add_option("--ranks-per-task", o.tier_options.fe_de_ranks,
                  "MPI ranks of one fe-de task (the FE rank and RVE servers; capped at the workers)")
       ->check(CLI::Range(1, 4096));
@@ -94,6 +95,8 @@ Options Parse(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::exit(app.exit(e) == 0 ? 0 : 2);  // --help: 0; any usage error: 2, as the other programs
   }
+  // The fe-ann tier's models live in the data directory, which every rank reads (as checkpoints).
+  o.tier_options.models_dir = (std::filesystem::path(o.data_dir) / "models").string();
   return o;
 }
 
@@ -116,7 +119,10 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   resolver.set_checkpoint_root((std::filesystem::path(o.data_dir) / "checkpoints").string());
   server::JobManager jobs(config, db, tiers, resolver);
   const int resumed = jobs.ResumeUnfinished();
-  server::MobilityServiceImpl service(jobs, db, tiers, resolver, server::ServiceLimits{});
+  server::MobilityServiceImpl service(jobs, db, tiers, resolver, server::ServiceLimits{},
+                                     o.tier_options.models_dir);
+  const int abandoned = tiers::SurrogateRegistry(o.tier_options.models_dir).CollectAbandoned();
+  if (abandoned > 0) spdlog::warn("removed {} unfinished model registrations", abandoned);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

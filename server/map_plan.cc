@@ -10,7 +10,7 @@ namespace gonogo::server {
 
 MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& vehicle,
                 const std::map<int32_t, SoilClassInfo>& soil_table, const TractionTier& tier,
-                const std::vector<double>& slips) {
+                const std::vector<double>& slips, const std::string& surrogate_model) {
   MapPlan plan;
   const size_t cells = terrain.cone_index_kpa.size();
   plan.cell_unit.assign(cells, -1);
@@ -59,6 +59,8 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
       r.tyre = vehicle.axles[a].tyre;
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;
+      r.surrogate_model = surrogate_model;
+      tier.ResolveChoices(r, "");
       TractionRequest q = cache::Quantise(r);
       std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
       auto [it, inserted] = task_of_key.try_emplace(key, static_cast<int>(plan.tasks.size()));

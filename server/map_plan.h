@@ -38,10 +38,12 @@ struct MapPlan {
   std::vector<std::vector<int>> unit_axle_task;  // [unit][axle] -> task index
 };
 
-// Throws InputError("soil_class") for a class code missing from the soil table.
+// Throws InputError("soil_class") for a class code missing from the soil table. `surrogate_model`
+// (fe-ann; empty: each soil's best) goes into every request, which the tier then settles
+// (TractionTier::ResolveChoices) before it is keyed.
 MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& vehicle,
                 const std::map<int32_t, SoilClassInfo>& soil_table, const TractionTier& tier,
-                const std::vector<double>& slips);
+                const std::vector<double>& slips, const std::string& surrogate_model = "");
 
 struct MapVerdicts {
   std::vector<uint8_t> go_class;  // per cell, mobility::GoClass codes

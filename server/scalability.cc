@@ -127,6 +127,7 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
   full.slips = TractionRequest::SlipSweep(request.slip_step() == 0 ? 0.05 : request.slip_step());
   full.Validate();
   tier.ValidateSoil(full.soil, "soil");
+  tier.ResolveChoices(full, "");
 
   // One task per scale: the exact cache key, else the pool (never similarity: see the header).
   std::vector<CurveTask> tasks;

@@ -13,6 +13,7 @@
 #include "solvers/common/errors.h"
 #include "solvers/common/soil_model.h"
 #include "solvers/tiers/soil_catalogue.h"
+#include "solvers/tiers/surrogate_registry.h"
 
 namespace gonogo::server {
 
@@ -37,8 +38,13 @@ const char* RoleFileName(v1::RasterRole role) {
 
 MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
                                          const TierRegistry& tiers, CurveResolver& resolver,
-                                         ServiceLimits limits)
-    : jobs_(jobs), curves_(db), tiers_(tiers), resolver_(resolver), limits_(limits) {}
+                                         ServiceLimits limits, std::string models_dir)
+    : jobs_(jobs),
+      curves_(db),
+      tiers_(tiers),
+      resolver_(resolver),
+      limits_(limits),
+      models_dir_(std::move(models_dir)) {}
 
 grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
                                             grpc::ServerReader<v1::SubmitMapRequest>* reader,
@@ -353,6 +359,42 @@ grpc::Status MobilityServiceImpl::ListSoilModels(grpc::ServerContext*,
     }
   }
   return grpc::Status::OK;
+}
+
+grpc::Status MobilityServiceImpl::ListSurrogateModels(
+    grpc::ServerContext*, const v1::ListSurrogateModelsRequest* request,
+    v1::ListSurrogateModelsResponse* response) {
+  try {
+    Require(request->soil_name().size() <= 256, "soil_name", "must be at most 256 characters");
+    if (models_dir_.empty()) return grpc::Status::OK;
+    for (const tiers::RegisteredSurrogate& m :
+         tiers::SurrogateRegistry(models_dir_).List(request->soil_name())) {
+      v1::SurrogateModel* out = response->add_models();
+      out->set_id(m.id);
+      out->set_soil_name(m.soil_name);
+      out->set_soil_parameters(m.soil_parameters);
+      out->set_fe_de_preset(m.fe_de_preset);
+      out->set_architecture(m.architecture);
+      out->set_members(static_cast<uint32_t>(m.members));
+      out->set_data_hash(m.data_hash);
+      out->set_samples(m.samples);
+      out->set_distance_threshold(m.distance_threshold);
+      out->set_spread_threshold(m.spread_threshold);
+      for (const tiers::HeldOutResult& h : m.held_out) {
+        v1::HeldOutError* e = out->add_held_out();
+        e->set_path(h.path);
+        e->set_replay_error(h.replay_error);
+      }
+      out->set_worst_held_out_error(m.worst_held_out_error);
+      out->set_training_seconds(m.training_seconds);
+      out->set_from_model(m.from_model);
+      out->set_code_version(m.code_version);
+      out->set_created_unix_ms(m.created_unix_ms);
+    }
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
 }
 
 }  // namespace gonogo::server

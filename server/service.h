@@ -24,8 +24,11 @@ struct ServiceLimits {
 
 class MobilityServiceImpl final : public v1::MobilityService::Service {
  public:
+  // `models_dir`: the fe-ann tier's model registry (solvers/tiers/surrogate_registry.h); empty:
+  // none.
   MobilityServiceImpl(JobManager& jobs, cache::Database& db, const TierRegistry& tiers,
-                      CurveResolver& resolver, ServiceLimits limits);
+                      CurveResolver& resolver, ServiceLimits limits,
+                      std::string models_dir = "");
 
   // While draining, new work is refused with UNAVAILABLE.
   void SetDraining() { draining_ = true; }
@@ -52,6 +55,8 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                          v1::ListTiersResponse*) override;
   grpc::Status ListSoilModels(grpc::ServerContext*, const v1::ListSoilModelsRequest*,
                               v1::ListSoilModelsResponse*) override;
+  grpc::Status ListSurrogateModels(grpc::ServerContext*, const v1::ListSurrogateModelsRequest*,
+                                   v1::ListSurrogateModelsResponse*) override;
 
  private:
   JobManager& jobs_;
@@ -59,6 +64,7 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
   const TierRegistry& tiers_;
   CurveResolver& resolver_;
   ServiceLimits limits_;
+  std::string models_dir_;
   std::atomic<bool> draining_{false};
 };
 

@@ -10,7 +10,8 @@ grpc::StatusCode CodeFor(ErrorKind kind) {
     case ErrorKind::kBadInput:
     case ErrorKind::kCannotCarry: return grpc::StatusCode::INVALID_ARGUMENT;
     case ErrorKind::kLimit: return grpc::StatusCode::RESOURCE_EXHAUSTED;
-    case ErrorKind::kNumerical: return grpc::StatusCode::FAILED_PRECONDITION;
+    case ErrorKind::kNumerical:
+    case ErrorKind::kPrecondition: return grpc::StatusCode::FAILED_PRECONDITION;
     case ErrorKind::kCancelled: return grpc::StatusCode::CANCELLED;
     case ErrorKind::kInternal: break;
   }

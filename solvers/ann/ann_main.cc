@@ -1,12 +1,12 @@
 // gonogo-ann: the surrogate's study on a soil's own DE RVE, from the command line.
 //
 //   gonogo-ann --soil seed000_sand_rve100 [--preset ci] [--steps 50] [--walks 16]
-//              [--architecture 64x64 ...] [--members 3] [--epochs 300] [--threads T] [--out DIR]
+//              [--pressures-kpa 2.5 5 ...] [--architecture 64x64 ...] [--members 3]
+//              [--epochs 300] [--threads T] [--out DIR]
 //
-// Runs laboratory paths (lab_paths.h) on the soil's RVE, with the RVE numerics of the fe-de
-// preset: a training set (drained triaxials, simple shears, unload-reload and isotropic paths at
-// 5-40 kPa, and seeded random walks) and a held-out set (other pressures, other seeds), on
-// OpenMP threads, one path per thread. Trains an ensemble per MLP --architecture (one network per
+// Runs the laboratory paths of the fe-ann recipe (solvers/tiers/surrogate_training.h) on the
+// soil's RVE, with the RVE numerics of the fe-de preset: a training set and a held-out set (other
+// pressures, another seed), on OpenMP threads, one path per thread. Trains an ensemble per MLP --architecture (one network per
 // GRU: gru32) and prints, per
 // architecture, the training figures, each held-out path's replay error (the stress error
 // relative to the path's mean |sigma|) and the evaluation cost. With --out, writes the histories
@@ -15,21 +15,28 @@
 #include <omp.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "solvers/ann/lab_paths.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/common/errors.h"
 #include "solvers/dem/rve/rve_material.h"
 #include "solvers/dem/rve/rve_soil.h"
+#include "solvers/tiers/fe_ann_tier.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "solvers/tiers/soil_catalogue.h"
+#include "solvers/tiers/surrogate_registry.h"
+#include "solvers/tiers/surrogate_training.h"
 
 namespace {
 
@@ -41,6 +48,14 @@ struct CommandLine {
   std::string preset = "ci";
   int steps = 50;
   int walks = 16;
+  std::vector<double> pressures_kpa;  // empty: the recipe's
+  bool unanchored = false;
+  double rig_load_n = 0;  // 0: no rig paths
+  double rig_diameter_m = 0.5;
+  double rig_width_m = 0.2;
+  int rig_points = 16;
+  std::vector<double> validate_loads_n;
+  std::string register_data_dir;  // non-empty: register each MLP ensemble there
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
   int epochs = 300;
@@ -48,70 +63,19 @@ struct CommandLine {
   std::string out;
 };
 
-struct NamedPath {
-  std::string name;
-  LabPathSpec spec;
-};
-
-LabPathSpec Spec(LabPath path, double pressure_pa, double max_strain, int steps,
-                 std::uint64_t seed = 1) {
-  LabPathSpec spec;
-  spec.path = path;
-  spec.pressure_pa = pressure_pa;
-  spec.max_strain = max_strain;
-  spec.steps = steps;
-  spec.seed = seed;
-  spec.walk_step_strain = 1e-3;
-  return spec;
-}
-
-std::vector<NamedPath> TrainingSet(int steps, int walks) {
-  std::vector<NamedPath> paths;
-  for (double p : {5e3, 10e3, 20e3, 40e3}) {
-    paths.push_back({"triaxial", Spec(LabPath::kTriaxial, p, 0.05, steps)});
-    paths.push_back({"simple-shear", Spec(LabPath::kSimpleShear, p, 0.1, steps)});
-  }
-  for (double p : {10e3, 30e3}) {
-    paths.push_back({"unload-reload", Spec(LabPath::kUnloadReload, p, 0.04, steps)});
-  }
-  for (double p : {5e3, 40e3}) {
-    paths.push_back({"isotropic", Spec(LabPath::kIsotropic, p, 0.01, steps)});
-  }
-  for (int k = 1; k <= walks; ++k) {
-    paths.push_back({"random-walk", Spec(LabPath::kRandomWalk, 5e3 * (1 + k % 8), 0.01, steps,
-                                         static_cast<std::uint64_t>(k))});
-  }
-  return paths;
-}
-
-std::vector<NamedPath> HeldOutSet(int steps) {
-  return {{"triaxial 15 kPa", Spec(LabPath::kTriaxial, 15e3, 0.05, steps)},
-          {"simple-shear 30 kPa", Spec(LabPath::kSimpleShear, 30e3, 0.1, steps)},
-          {"unload-reload 20 kPa", Spec(LabPath::kUnloadReload, 20e3, 0.04, steps)},
-          {"random-walk 15 kPa seed 1001", Spec(LabPath::kRandomWalk, 15e3, 0.01, steps, 1001)}};
-}
-
+// The recipe's paths run on the RVE, with a progress line and each early stop named.
 std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
-                                    const std::vector<NamedPath>& paths, int threads,
+                                    const std::vector<tiers::NamedLabPath>& paths, int threads,
                                     const char* label) {
-  std::vector<StrainHistory> histories(paths.size());
-  DriverOptions options;
-  options.relative_tolerance = 0.02;  // a packing's stress is a sum over contacts
-  int done = 0;
-#pragma omp parallel for schedule(dynamic) num_threads(threads)
-  for (int k = 0; k < static_cast<int>(paths.size()); ++k) {
-    histories[k] = RunLabPath(rve, paths[k].spec, options);
-#pragma omp critical
-    {
-      ++done;
-      std::fprintf(stderr, "\r%s paths: %d / %zu", label, done, paths.size());
-    }
-  }
+  const std::vector<StrainHistory> histories =
+      tiers::RunLabPaths(rve, paths, threads, [&](int done) {
+        std::fprintf(stderr, "\r%s paths: %d / %zu", label, done, paths.size());
+      });
   std::fprintf(stderr, "\n");
   for (std::size_t k = 0; k < paths.size(); ++k) {
     if (!histories[k].stopped_reason.empty()) {
-      std::fprintf(stderr, "  %s %s (%.0f Pa) stopped after %zu steps: %s\n", label,
-                   paths[k].name.c_str(), paths[k].spec.pressure_pa, histories[k].steps(),
+      std::fprintf(stderr, "  %s %s stopped after %zu steps: %s\n", label,
+                   paths[k].name.c_str(), histories[k].steps(),
                    histories[k].stopped_reason.c_str());
     }
   }
@@ -191,6 +155,75 @@ void RunRecurrent(const CommandLine& line, const std::string& text,
   if (!line.out.empty()) gru.Save(line.out + "/" + gru.architecture() + ".pt");
 }
 
+TractionRequest RigRequest(const CommandLine& line, double load_n) {
+  TractionRequest request;
+  request.soil.soil_name = line.soil;
+  request.tyre.diameter_m = line.rig_diameter_m;
+  request.tyre.width_m = line.rig_width_m;
+  request.tyre.section_height_m = 0.5 * line.rig_width_m;
+  request.wheel_load_n = load_n;
+  request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+  return request;
+}
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// fe-de curves by load, computed once each (the rig run's is the recorded run's).
+struct FeDeReference {
+  tiers::FeDeRunReport run;
+  double seconds = 0;
+};
+
+// The ensemble as the fe-ann tier's model, run at each validation load against fe-de.
+void Validate(const CommandLine& line, const std::string& model_directory,
+              const std::string& architecture, const SoilParameters& soil,
+              std::map<double, FeDeReference>& references) {
+  tiers::SurrogateModelRecord record;
+  record.id = architecture;
+  record.directory = model_directory;
+  record.soil_parameters = CanonicalText(soil);
+  record.fe_de_preset = line.preset;
+  tiers::FeAnnOptions options;
+  options.fe_de = tiers::FeDeOptions::Preset(line.preset);
+  const tiers::FeAnnTier fe_ann(
+      options, std::make_shared<tiers::ListedSurrogateModels>(
+                   std::vector<tiers::SurrogateModelRecord>{record}));
+  const tiers::FeDeTier fe_de(options.fe_de);
+  for (double load_n : line.validate_loads_n) {
+    const TractionRequest request = RigRequest(line, load_n);
+    if (references.count(load_n) == 0) {
+      const auto start = std::chrono::steady_clock::now();
+      references[load_n].run = fe_de.Run(request, {});
+      references[load_n].seconds = Since(start);
+    }
+    const FeDeReference& reference = references[load_n];
+    const auto start = std::chrono::steady_clock::now();
+    const tiers::AnnRunReport ann = fe_ann.Run(request, {});
+    const double seconds = Since(start);
+    const double radius_m = 0.5 * line.rig_diameter_m;
+    double pull = 0, torque = 0, sinkage = 0;
+    const auto& a = ann.curve.points;
+    const auto& d = reference.run.curve.points;
+    for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
+      pull = std::max(pull, std::abs(a[k].drawbar_pull_n - d[k].drawbar_pull_n) / load_n);
+      torque = std::max(torque, std::abs(a[k].torque_nm - d[k].torque_nm) / (radius_m * load_n));
+      sinkage = std::max(sinkage, std::abs(a[k].sinkage_m - d[k].sinkage_m) / radius_m);
+    }
+    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%.2f,%.2f,%.2f\n", architecture.c_str(),
+                load_n, reference.seconds, seconds, reference.seconds / seconds,
+                ann.network_seconds, ann.fallback_seconds, ann.fallbacks, 100 * pull,
+                100 * torque, 100 * sinkage);
+    for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
+      std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
+                  a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
+                  d[k].torque_nm, 1e3 * a[k].sinkage_m, 1e3 * d[k].sinkage_m);
+    }
+    std::fflush(stdout);
+  }
+}
+
 int Run(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
@@ -206,55 +239,133 @@ int Run(const CommandLine& line) {
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<NamedPath> training_paths = TrainingSet(line.steps, line.walks);
-  const std::vector<NamedPath> held_out_paths = HeldOutSet(line.steps);
+  tiers::SurrogateRecipe recipe;
+  recipe.steps = line.steps;
+  recipe.walks = line.walks;
+  if (!line.pressures_kpa.empty()) {
+    recipe.pressures_pa.clear();
+    for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
+  }
+  recipe.Validate("");
+  const std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
+  const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
   const std::vector<StrainHistory> training =
       RunPaths(*rve, training_paths, line.threads, "training");
   const std::vector<StrainHistory> held_out =
       RunPaths(*rve, held_out_paths, line.threads, "held-out");
   const double generation_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::vector<StrainHistory> training_all = training;
+  std::vector<StrainHistory> held_out_all = held_out;
+  std::vector<std::string> held_out_names;
+  for (const tiers::NamedLabPath& path : held_out_paths) held_out_names.push_back(path.name);
+  std::map<double, FeDeReference> references;
+  if (line.rig_load_n > 0) {
+    const auto rig_start = std::chrono::steady_clock::now();
+    const tiers::RecordedRigRun recorded =
+        tiers::RecordRigPaths(tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n));
+    references[line.rig_load_n] = {recorded.run, Since(rig_start)};
+    const std::vector<StrainHistory> rig_training =
+        tiers::EvenlySpread(recorded.paths, line.rig_points, 0);
+    const int rig_held_out = std::max(1, line.rig_points / 2);
+    const std::vector<StrainHistory> rig_checks = tiers::EvenlySpread(
+        recorded.paths, rig_held_out,
+        static_cast<int>(recorded.paths.size() / (2 * std::max(1, line.rig_points))) + 1);
+    training_all.insert(training_all.end(), rig_training.begin(), rig_training.end());
+    for (std::size_t k = 0; k < rig_checks.size(); ++k) {
+      held_out_all.push_back(rig_checks[k]);
+      held_out_names.push_back("rig point " + std::to_string(k + 1));
+    }
+    std::printf("# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
+                "paths recorded, %zu in training, %zu held out\n",
+                line.rig_load_n, line.preset.c_str(), recorded.run.elements,
+                recorded.run.fe_steps, Since(rig_start), recorded.paths.size(),
+                rig_training.size(), rig_checks.size());
+  }
   std::size_t steps = 0;
-  for (const StrainHistory& history : training) steps += history.steps();
+  for (const StrainHistory& history : training_all) steps += history.steps();
   std::printf("# soil %s (RVEs of %g grains), preset %s: %zu training paths (%zu steps), %zu "
               "held-out, generated in %.1f s on %d threads\n",
               line.soil.c_str(), entry->parameters.Get("grains_per_rve"), line.preset.c_str(),
-              training.size(), steps, held_out.size(), generation_s, line.threads);
+              training_all.size(), steps, held_out_all.size(), generation_s, line.threads);
   if (!line.out.empty()) {
     std::filesystem::create_directories(line.out);
-    WriteHistoriesNpy(line.out + "/training.npy", training);
-    WriteHistoriesNpy(line.out + "/held_out.npy", held_out);
+    WriteHistoriesNpy(line.out + "/training.npy", training_all);
+    WriteHistoriesNpy(line.out + "/held_out.npy", held_out_all);
   }
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
-  for (const NamedPath& path : held_out_paths) std::printf("%s %%,", path.name.c_str());
+  for (const std::string& name : held_out_names) std::printf("%s %%,", name.c_str());
   std::printf("us_per_point_batch_1000\n");
   for (const std::string& text : line.architectures) {
     if (text.rfind("gru", 0) == 0) {
-      RunRecurrent(line, text, training, held_out);
+      RunRecurrent(line, text, training_all, held_out_all);
       continue;
     }
-    const MlpArchitecture architecture = ParseArchitecture(text);
+    MlpArchitecture architecture = ParseArchitecture(text);
+    architecture.anchored = !line.unanchored;
     TrainingOptions options;
     options.epochs = line.epochs;
     options.batch_size = 64;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
-        SurrogateEnsemble::Train(training, architecture, options, line.members, &reports);
+        SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - train_start).count();
     double final_loss = 0;
     for (const TrainingReport& report : reports) final_loss += report.final_loss / reports.size();
     std::printf("%s,%d,%d,%lld,%.1f,%.3g,", architecture.Describe().c_str(), line.members,
                 line.epochs, static_cast<long long>(reports.front().samples), train_s, final_loss);
-    for (const StrainHistory& history : held_out) {
+    for (const StrainHistory& history : held_out_all) {
       std::printf("%.2f,", 100 * ReplayError(ensemble, history));
     }
-    const std::vector<SurrogateInput> batch = TimingBatch(training, 1000);
+    const std::vector<SurrogateInput> batch = TimingBatch(training_all, 1000);
     std::printf("%.2f\n",
                 MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
     std::fflush(stdout);
     if (!line.out.empty()) ensemble.Save(line.out + "/" + architecture.Describe());
+    if (!line.register_data_dir.empty()) {
+      const tiers::SurrogateRegistry registry(
+          (std::filesystem::path(line.register_data_dir) / "models").string());
+      tiers::RegisteredSurrogate record;
+      record.id = registry.NewId(line.soil, architecture.Describe());
+      record.soil_name = line.soil;
+      record.soil_parameters = CanonicalText(entry->parameters);
+      record.fe_de_preset = line.preset;
+      record.architecture = architecture.Describe();
+      record.members = line.members;
+      record.data_hash = tiers::HistoriesHash(training_all);
+      record.samples = reports.front().samples;
+      record.distance_threshold = ensemble.distance_threshold();
+      record.spread_threshold = ensemble.spread_threshold();
+      for (std::size_t k = 0; k < held_out_all.size(); ++k) {
+        const double error = ReplayError(ensemble, held_out_all[k]);
+        record.held_out.push_back({held_out_names[k], error});
+        record.worst_held_out_error = std::max(record.worst_held_out_error, error);
+      }
+      record.training_seconds = train_s;
+      record.code_version = GONOGO_VERSION;
+      record.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                   std::chrono::system_clock::now().time_since_epoch())
+                                   .count();
+      const tiers::RegisteredSurrogate registered = registry.Register(record, ensemble);
+      std::printf("# registered model %s in %s\n", registered.id.c_str(),
+                  registered.directory.c_str());
+      std::fflush(stdout);
+    }
+    if (!line.validate_loads_n.empty()) {
+      const std::string directory =
+          line.out.empty() ? (std::filesystem::temp_directory_path() /
+                              ("gonogo_ann_" + std::to_string(::getpid()) + "_" +
+                               architecture.Describe()))
+                                 .string()
+                           : line.out + "/" + architecture.Describe();
+      if (line.out.empty()) ensemble.Save(directory);
+      std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
+                  "fallback_s,fallbacks,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+      Validate(line, directory, architecture.Describe(), entry->parameters, references);
+      if (line.out.empty()) std::filesystem::remove_all(directory);
+    }
   }
   return 0;
 }
@@ -274,10 +385,36 @@ int main(int argc, char** argv) {
   app.add_option("--walks", line.walks, "random walks in the training set")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
+  app.add_option("--pressures-kpa", line.pressures_kpa,
+                 "confining pressures of the training paths, kPa, increasing (default: "
+                 "2.5 5 10 20 40 80)");
   app.add_option("--architecture", line.architectures,
                  "MLP hidden widths joined by x (64x64; the seed's 600x600x600x600x600x600x600), "
                  "or a GRU and its width (gru32; one network, not an ensemble)")
       ->capture_default_str();
+  app.add_flag("--unanchored", line.unanchored,
+               "MLPs without the at-rest anchor (d_sigma(0) = 0; stress_surrogate.h)");
+  app.add_option("--rig-load-n", line.rig_load_n,
+                 "record the paths of an fe-de rig run of the preset at this wheel load (N) and "
+                 "train and check on them too (seed 000's step 2); 0: none")
+      ->check(CLI::Range(0.0, 1e7));
+  app.add_option("--rig-diameter-m", line.rig_diameter_m, "the rig wheel's diameter, m")
+      ->check(CLI::Range(0.05, 5.0))
+      ->capture_default_str();
+  app.add_option("--rig-width-m", line.rig_width_m, "the rig wheel's width, m")
+      ->check(CLI::Range(0.01, 2.0))
+      ->capture_default_str();
+  app.add_option("--rig-points", line.rig_points,
+                 "recorded points in the training set (half as many others held out)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--validate-load-n", line.validate_loads_n,
+                 "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
+                 "fe-de");
+  app.add_option("--register", line.register_data_dir,
+                 "register each MLP ensemble with its provenance in this gonogo-server data "
+                 "directory (DATA_DIR/models), where the fe-ann tier finds it")
+      ->type_name("DATA_DIR");
   app.add_option("--members", line.members, "ensemble members")
       ->check(CLI::Range(3, 64))
       ->capture_default_str();

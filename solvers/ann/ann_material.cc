@@ -1,6 +1,8 @@
 #include "solvers/ann/ann_material.h"
 
 #include <algorithm>
+#include <chrono>
+#include <functional>
 
 #include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
@@ -9,7 +11,7 @@
 namespace gonogo::ann {
 namespace {
 
-constexpr char kStateTag[9] = "GNGANN01";
+constexpr char kStateTag[9] = "GNGANN02";
 
 std::shared_ptr<const IncrementNode> Append(std::shared_ptr<const IncrementNode> history,
                                             const Matrix3& increment) {
@@ -30,6 +32,7 @@ std::unique_ptr<AnnState> Advance(const AnnState& committed, const Matrix3& incr
   next->history = Append(committed.history, increment);
   next->flags = committed.flags;
   next->fell_back_at_step = committed.fell_back_at_step;
+  next->origin = committed.origin;
   return next;
 }
 
@@ -66,6 +69,32 @@ void FallbackLog::RecordUnansweredFlag() {
   ++unanswered_flags_;
 }
 
+void FallbackLog::RecordNetworkCall(double seconds, std::int64_t points) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  network_seconds_ += seconds;
+  network_point_updates_ += points;
+}
+
+void FallbackLog::RecordFallbackSeconds(double seconds) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  fallback_seconds_ += seconds;
+}
+
+double FallbackLog::network_seconds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return network_seconds_;
+}
+
+std::int64_t FallbackLog::network_point_updates() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return network_point_updates_;
+}
+
+double FallbackLog::fallback_seconds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return fallback_seconds_;
+}
+
 std::vector<FallbackLog::Event> FallbackLog::fallbacks() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return fallbacks_;
@@ -94,6 +123,7 @@ std::unique_ptr<material::MaterialState> AnnState::Clone() const {
   copy->flags = flags;
   copy->fallback = fallback ? fallback->Clone() : nullptr;
   copy->fell_back_at_step = fell_back_at_step;
+  copy->origin = origin;
   return copy;
 }
 
@@ -108,6 +138,7 @@ std::string AnnState::Serialize() const {
   out.Put(static_cast<std::uint64_t>(increments.size()));
   for (const Matrix3& increment : increments) out.Put(increment);
   out.PutBlob(fallback ? fallback->Serialize() : std::string());
+  out.PutBlob(origin ? *origin : std::string());
   return out.Take();
 }
 
@@ -157,9 +188,14 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
       in.Get(increment);
       state->history = Append(std::move(state->history), increment);
     }
-    std::string fallback_bytes;
+    std::string fallback_bytes, origin_bytes;
     in.GetBlob(fallback_bytes);
+    in.GetBlob(origin_bytes);
     if (!in.AtEnd()) throw InputError("state", "trailing bytes");
+    if (!origin_bytes.empty()) {
+      if (fallback_ == nullptr) throw InputError("state", "a point with an origin and no fallback");
+      state->origin = Intern(std::move(origin_bytes));
+    }
     if (!fallback_bytes.empty()) {
       if (fallback_ == nullptr) throw InputError("state", "a fallen-back point and no fallback");
       state->fallback = fallback_->RestoreState(fallback_bytes);
@@ -170,9 +206,40 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
   return state;
 }
 
+std::shared_ptr<const std::string> AnnMaterial::Intern(std::string bytes) const {
+  const std::size_t hash = std::hash<std::string>{}(bytes);
+  std::lock_guard<std::mutex> lock(intern_mutex_);
+  const auto [first, last] = origins_.equal_range(hash);
+  for (auto it = first; it != last; ++it) {
+    if (*it->second == bytes) return it->second;
+  }
+  auto shared = std::make_shared<const std::string>(std::move(bytes));
+  origins_.emplace(hash, shared);
+  return shared;
+}
+
+std::unique_ptr<AnnState> AnnMaterial::StateFrom(const std::string& real_state_bytes) const {
+  if (fallback_ == nullptr) {
+    throw InputError("material.state", "a point cannot start from a real state without its model");
+  }
+  const std::unique_ptr<material::MaterialState> real = fallback_->RestoreState(real_state_bytes);
+  material::PointIncrement zero;
+  zero.committed = real.get();
+  const std::vector<material::PointResponse> start = fallback_->Update({zero}, false);
+  if (start.at(0).status != material::UpdateStatus::kOk) {
+    throw NumericalError("fallback model: a zero increment on a point's starting state failed: " +
+                         start.at(0).reason);
+  }
+  auto state = std::make_unique<AnnState>();
+  state->stress_pa = start.at(0).stress_pa;
+  state->origin = Intern(real_state_bytes);
+  return state;
+}
+
 material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const Matrix3& increment,
                                               bool want_tangent) const {
-  std::unique_ptr<material::MaterialState> state = fallback_->InitialState();
+  std::unique_ptr<material::MaterialState> state =
+      committed.origin ? fallback_->RestoreState(*committed.origin) : fallback_->InitialState();
   const std::vector<Matrix3> history = committed.Increments();
   for (std::size_t s = 0; s < history.size(); ++s) {
     material::PointIncrement replay;
@@ -229,7 +296,12 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     inputs.push_back(input);
     kinematics.push_back(std::move(split));
   }
+  using Clock = std::chrono::steady_clock;
+  const auto network_start = Clock::now();
   const std::vector<EnsembleAnswer> answers = ensemble_->Answer(inputs, want_tangent);
+  log_->RecordNetworkCall(std::chrono::duration<double>(Clock::now() - network_start).count(),
+                          static_cast<std::int64_t>(inputs.size()));
+  const auto fallback_start = Clock::now();
   for (std::size_t k = 0; k < on_network.size(); ++k) {
     const std::size_t i = on_network[k];
     const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
@@ -276,6 +348,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       responses[i].state = std::move(next);
     }
   }
+  log_->RecordFallbackSeconds(std::chrono::duration<double>(Clock::now() - fallback_start).count());
   return responses;
 }
 

@@ -13,13 +13,17 @@
 // committed state tells whether and when its point fell back (fell_back_at_step), which is what a
 // curve reports; the FallbackLog has every fallback and unanswered flag the material made,
 // including those of trial updates its caller then discarded (their cost, not their count of
-// points).
+// points), and the seconds the network and the fallbacks took.
+//
+// A point may start from a state of the real model other than its fresh one (StateFrom: an RVE
+// settled at the stress of its depth in an FE bin); its fallback then replays from there.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "solvers/ann/surrogate_ensemble.h"
@@ -43,13 +47,21 @@ class FallbackLog {
   };
   void RecordFallback(const Event& event);
   void RecordUnansweredFlag();
+  void RecordNetworkCall(double seconds, std::int64_t points);
+  void RecordFallbackSeconds(double seconds);  // replays and points answered by the real model
   std::vector<Event> fallbacks() const;
   std::int64_t unanswered_flags() const;
+  double network_seconds() const;
+  std::int64_t network_point_updates() const;  // point updates the ensemble answered
+  double fallback_seconds() const;
 
  private:
   mutable std::mutex mutex_;
   std::vector<Event> fallbacks_;
   std::int64_t unanswered_flags_ = 0;
+  double network_seconds_ = 0;
+  std::int64_t network_point_updates_ = 0;
+  double fallback_seconds_ = 0;
 };
 
 // The increments a point has taken, newest first, shared between a state and the states made
@@ -75,6 +87,9 @@ class AnnState : public material::MaterialState {
   // Set once the point has fallen back: the real model's state answers from then on.
   std::unique_ptr<material::MaterialState> fallback;
   std::int64_t fell_back_at_step = -1;
+  // The real model's state the point started from (its bytes, shared by the points that started
+  // alike); null: the real model's fresh state.
+  std::shared_ptr<const std::string> origin;
 };
 
 class AnnMaterial : public material::ConstitutiveModel {
@@ -89,6 +104,11 @@ class AnnMaterial : public material::ConstitutiveModel {
   std::unique_ptr<material::MaterialState> InitialState() const override;
   // Throws InputError("material.state", ...) for bytes that are not an AnnState of this model.
   std::unique_ptr<material::MaterialState> RestoreState(const std::string& bytes) const override;
+  // A point that starts where the real model's state `real_state_bytes` is: its stress, no
+  // accumulated strain, and a fallback that replays from that state. Throws InputError
+  // ("material.state", ...) for bytes the real model does not read, NumericalError when the real
+  // model cannot take a zero increment there.
+  std::unique_ptr<AnnState> StateFrom(const std::string& real_state_bytes) const;
   // The network's points in one batched ensemble call; points on the fallback in one batched
   // call of the real model; fallbacks replayed one point at a time.
   std::vector<material::PointResponse> Update(const std::vector<material::PointIncrement>& increments,
@@ -105,7 +125,12 @@ class AnnMaterial : public material::ConstitutiveModel {
   std::shared_ptr<const material::ConstitutiveModel> fallback_;
   AnnMaterialOptions options_;
   Matrix3 initial_stress_pa_ = Matrix3::Zero();
+  // One copy of each distinct origin (the points of one depth share theirs).
+  std::shared_ptr<const std::string> Intern(std::string bytes) const;
+
   std::shared_ptr<FallbackLog> log_ = std::make_shared<FallbackLog>();
+  mutable std::mutex intern_mutex_;
+  mutable std::unordered_multimap<std::size_t, std::shared_ptr<const std::string>> origins_;  // by hash
 };
 
 }  // namespace gonogo::ann

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "solvers/ann/fused_mlp.h"
 #include "solvers/common/errors.h"
 
 namespace gonogo::ann {
@@ -63,11 +64,13 @@ std::pair<torch::Tensor, torch::Tensor> Standardisation(const torch::Tensor& val
   return {mean, scale};
 }
 
-// The TorchScript module: standardise, the tanh layers, the linear output, back to Pa.
+// The TorchScript module: standardise, the tanh layers, the linear output, back to Pa. Anchored:
+// the same network at rest (the strain increment zeroed) subtracted, so that d_sigma(0) = 0.
 torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
                                 const std::vector<torch::Tensor>& biases, const torch::Tensor& in_mean,
                                 const torch::Tensor& in_scale, const torch::Tensor& out_mean,
-                                const torch::Tensor& out_scale, const std::string& architecture) {
+                                const torch::Tensor& out_scale, const std::string& architecture,
+                                bool anchored) {
   torch::jit::Module module("StressSurrogate");
   module.register_buffer("in_mean", in_mean.detach().clone());
   module.register_buffer("in_scale", in_scale.detach().clone());
@@ -75,7 +78,7 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
   module.register_buffer("out_scale", out_scale.detach().clone());
   module.register_attribute("architecture", c10::StringType::get(), architecture);
   std::ostringstream source;
-  source << "def forward(self, x):\n"
+  source << "def network(self, x):\n"
          << "    h = (x - self.in_mean) / self.in_scale\n";
   for (std::size_t layer = 0; layer < weights.size(); ++layer) {
     const std::string w = "w" + std::to_string(layer), b = "b" + std::to_string(layer);
@@ -85,7 +88,14 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
     source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
            << ".t()) + self." << b << (last ? "" : ")") << "\n";
   }
-  source << "    return h * self.out_scale + self.out_mean\n";
+  source << "    return h\n"
+         << "def forward(self, x):\n";
+  if (anchored) {
+    source << "    rest = torch.cat([torch.zeros_like(x[:, 0:6]), x[:, 6:]], 1)\n"
+           << "    return (self.network(x) - self.network(rest)) * self.out_scale\n";
+  } else {
+    source << "    return self.network(x) * self.out_scale + self.out_mean\n";
+  }
   module.define(source.str());
   module.eval();
   return module;
@@ -96,7 +106,43 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
 struct StressSurrogate::Impl {
   mutable torch::jit::Module module;
   std::string architecture;
+  FusedMlp fused;  // the module's weights, for evaluation (fused_mlp.h)
 };
+
+namespace {
+
+Eigen::VectorXd VectorOf(const torch::Tensor& tensor) {
+  const torch::Tensor t = tensor.detach().to(torch::kFloat64).contiguous().reshape({-1});
+  return Eigen::Map<const Eigen::VectorXd>(t.data_ptr<double>(), t.numel());
+}
+
+// The module's weights as the fused kernel's; throws c10::Error for a module without them.
+FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architecture) {
+  FusedMlp fused;
+  for (int layer = 0; module.hasattr("w" + std::to_string(layer)); ++layer) {
+    const torch::Tensor w = module.attr("w" + std::to_string(layer)).toTensor().detach()
+                                .to(torch::kFloat64).contiguous();
+    // Row-major (out, in) into a column-major matrix of the same shape.
+    Eigen::MatrixXd weights(w.size(0), w.size(1));
+    const double* data = w.data_ptr<double>();
+    for (Eigen::Index r = 0; r < weights.rows(); ++r) {
+      for (Eigen::Index c = 0; c < weights.cols(); ++c) weights(r, c) = data[r * weights.cols() + c];
+    }
+    fused.weights.push_back(std::move(weights));
+    fused.biases.push_back(VectorOf(module.attr("b" + std::to_string(layer)).toTensor()));
+  }
+  fused.in_mean = VectorOf(module.attr("in_mean").toTensor());
+  fused.in_scale = VectorOf(module.attr("in_scale").toTensor());
+  fused.out_mean = VectorOf(module.attr("out_mean").toTensor());
+  fused.out_scale = VectorOf(module.attr("out_scale").toTensor());
+  const std::string suffix = "-anchored";
+  fused.anchored = architecture.size() > suffix.size() &&
+                   architecture.compare(architecture.size() - suffix.size(), suffix.size(),
+                                        suffix) == 0;
+  return fused;
+}
+
+}  // namespace
 
 void MlpArchitecture::Validate(const std::string& field_prefix) const {
   if (hidden_widths.empty() || hidden_widths.size() > 16) {
@@ -114,7 +160,7 @@ std::string MlpArchitecture::Describe() const {
   for (std::size_t k = 0; k < hidden_widths.size(); ++k) {
     name += (k ? "x" : "") + std::to_string(hidden_widths[k]);
   }
-  return name + "-tanh";
+  return name + (anchored ? "-tanh-anchored" : "-tanh");
 }
 
 void TrainingOptions::Validate(const std::string& field_prefix) const {
@@ -180,9 +226,14 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
     throw InputError("histories", "a step holds a value that is not finite");
   }
   const auto [in_mean, in_scale] = Standardisation(x);
-  const auto [out_mean, out_scale] = Standardisation(y);
+  auto [out_mean, out_scale] = Standardisation(y);
+  // Anchored, the output has no offset: d_sigma is the difference of two network answers.
+  if (architecture.anchored) out_mean = torch::zeros_like(out_mean);
   const torch::Tensor xs = (x - in_mean) / in_scale;
   const torch::Tensor ys = (y - out_mean) / out_scale;
+  torch::Tensor rest = x.clone();
+  rest.slice(1, 0, 6).zero_();
+  const torch::Tensor xs_rest = (rest - in_mean) / in_scale;
 
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
@@ -211,8 +262,9 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
       const torch::Tensor batch =
           order.slice(0, begin, std::min<std::int64_t>(begin + options.batch_size, samples));
       optimizer.zero_grad();
-      const torch::Tensor loss =
-          torch::mse_loss(net->forward(xs.index_select(0, batch)), ys.index_select(0, batch));
+      torch::Tensor predicted = net->forward(xs.index_select(0, batch));
+      if (architecture.anchored) predicted = predicted - net->forward(xs_rest.index_select(0, batch));
+      const torch::Tensor loss = torch::mse_loss(predicted, ys.index_select(0, batch));
       loss.backward();
       optimizer.step();
       loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
@@ -228,8 +280,9 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
   }
   auto impl = std::make_unique<Impl>(Impl{
       ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
-                   architecture.Describe()),
-      architecture.Describe()});
+                   architecture.Describe(), architecture.anchored),
+      architecture.Describe(), FusedMlp{}});
+  impl->fused = FusedOf(impl->module, impl->architecture);
   figures.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (report != nullptr) *report = figures;
@@ -238,6 +291,23 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
 
 std::vector<Vector6> StressSurrogate::StressIncrements(const std::vector<SurrogateInput>& inputs,
                                                        std::vector<Voigt6x6>* tangents) const {
+  Eigen::MatrixXd x(kInputs, static_cast<Eigen::Index>(inputs.size()));
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    const auto column = static_cast<Eigen::Index>(n);
+    x.col(column).segment<6>(0) = inputs[n].strain_increment;
+    x.col(column).segment<6>(6) = inputs[n].stress_pa;
+    x.col(column).segment<6>(12) = inputs[n].accumulated_strain;
+  }
+  const Eigen::MatrixXd y = impl_->fused.Evaluate(x, tangents);
+  std::vector<Vector6> increments(inputs.size());
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    increments[n] = y.col(static_cast<Eigen::Index>(n));
+  }
+  return increments;
+}
+
+std::vector<Vector6> StressSurrogate::StressIncrementsByModule(
+    const std::vector<SurrogateInput>& inputs, std::vector<Voigt6x6>* tangents) const {
   std::vector<Vector6> increments(inputs.size());
   if (inputs.empty()) {
     if (tangents != nullptr) tangents->clear();
@@ -282,6 +352,7 @@ StressSurrogate StressSurrogate::Load(const std::string& path) {
     impl->module = torch::jit::load(path);
     impl->architecture = impl->module.attr("architecture").toStringRef();
     impl->module.eval();
+    impl->fused = FusedOf(impl->module, impl->architecture);
   } catch (const c10::Error& e) {
     throw InputError("model", "not a gonogo stress surrogate (" + path + "): " +
                                   e.what_without_backtrace());

@@ -31,8 +31,13 @@ using Voigt6x6 = material::Voigt6x6;
 
 struct MlpArchitecture {
   std::vector<int> hidden_widths = {64, 64};  // tanh layers; the seed's network: 7 x 600
+  // d_sigma = N(d_eps, sigma_n, eps_n) - N(0, sigma_n, eps_n): no stress change without a strain
+  // increment, by construction. An FE point takes hundreds of increments far smaller than a
+  // laboratory step; a network whose answer at rest is a small nonzero error adds that error at
+  // every one of them.
+  bool anchored = true;
   void Validate(const std::string& field_prefix) const;
-  std::string Describe() const;  // "mlp-64x64-tanh"
+  std::string Describe() const;  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored)
 };
 
 struct TrainingOptions {
@@ -70,9 +75,14 @@ class StressSurrogate {
                                const MlpArchitecture& architecture,
                                const TrainingOptions& options, TrainingReport* report = nullptr);
 
-  // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point.
+  // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point. By the
+  // fused Eigen kernel (fused_mlp.h) on the module's weights.
   std::vector<Vector6> StressIncrements(const std::vector<SurrogateInput>& inputs,
                                         std::vector<Voigt6x6>* tangents = nullptr) const;
+  // The same by the TorchScript module itself (its forward, and autograd for the tangent): what
+  // the fused kernel is checked against, and what Python's torch runs.
+  std::vector<Vector6> StressIncrementsByModule(const std::vector<SurrogateInput>& inputs,
+                                                std::vector<Voigt6x6>* tangents = nullptr) const;
 
   // TorchScript (torch.jit.load in Python: forward takes an (N, 18) float64 tensor of the inputs
   // above and gives (N, 6) d_sigma). Load throws InputError("model", ...) for a file that is not

@@ -13,6 +13,7 @@ const char* ErrorKindName(ErrorKind kind) {
     case ErrorKind::kNumerical: return "numerical failure";
     case ErrorKind::kCancelled: return "cancelled";
     case ErrorKind::kInternal: return "internal error";
+    case ErrorKind::kPrecondition: return "missing prerequisite";
   }
   return "internal error";
 }
@@ -28,6 +29,8 @@ ClassifiedError ClassifyCurrentException() {
     return {ErrorKind::kLimit, e.what(), e.field()};
   } catch (const NumericalError& e) {
     return {ErrorKind::kNumerical, e.what(), ""};
+  } catch (const PreconditionError& e) {
+    return {ErrorKind::kPrecondition, e.what(), e.field()};
   } catch (const CancelledError& e) {
     return {ErrorKind::kCancelled, e.what(), ""};
   } catch (const std::exception& e) {
@@ -44,6 +47,7 @@ void ThrowError(ErrorKind kind, const std::string& field, const std::string& mes
     case ErrorKind::kLimit: throw LimitError(field, message);
     case ErrorKind::kNumerical: throw NumericalError(message);
     case ErrorKind::kCancelled: throw CancelledError();
+    case ErrorKind::kPrecondition: throw PreconditionError(field, message);
     case ErrorKind::kNone:
     case ErrorKind::kInternal: break;
   }

@@ -46,6 +46,19 @@ class NumericalError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The request is valid but the service lacks what it needs to answer it (e.g. no surrogate model
+// is registered for the soil): names the field and what would provide it. Maps to
+// FAILED_PRECONDITION.
+class PreconditionError : public std::runtime_error {
+ public:
+  PreconditionError(std::string field, const std::string& reason)
+      : std::runtime_error(field + ": " + reason), field_(std::move(field)) {}
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string field_;
+};
+
 // Thrown by a solver that noticed a cancellation part-way through.
 class CancelledError : public std::runtime_error {
  public:
@@ -62,6 +75,7 @@ enum class ErrorKind : int {
   kNumerical = 4,    // NumericalError: the solver could not answer valid input
   kCancelled = 5,    // CancelledError: the caller no longer wants the answer
   kInternal = 6,     // anything else: a defect or an environment failure
+  kPrecondition = 7,  // PreconditionError: something the request needs is missing, names the field
 };
 
 // "bad input", "soil cannot carry", ... for messages and logs.
@@ -71,7 +85,7 @@ const char* ErrorKindName(ErrorKind kind);
 struct ClassifiedError {
   ErrorKind kind = ErrorKind::kInternal;
   std::string message;
-  std::string field;  // for kBadInput, kCannotCarry and kLimit: the field named
+  std::string field;  // for kBadInput, kCannotCarry, kLimit and kPrecondition: the field named
 };
 ClassifiedError ClassifyCurrentException();
 

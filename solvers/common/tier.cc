@@ -13,6 +13,12 @@ SoilState SoilForTier(const TractionTier& tier, SoilState soil) {
   return soil;
 }
 
+void TractionTier::ResolveChoices(TractionRequest& request,
+                                  const std::string& field_prefix) const {
+  Require(request.surrogate_model.empty(), field_prefix + "surrogate_model",
+          "the " + Name() + " tier takes no surrogate model");
+}
+
 void TierRegistry::Register(std::unique_ptr<TractionTier> tier) {
   const std::string name = tier->Name();
   tiers_[name] = std::move(tier);

@@ -82,6 +82,12 @@ class TractionTier {
   // Checks, before any work is queued, that the tier can resolve this soil (library name, explicit
   // parameters); throws InputError naming `field`. Cheap: no solver work.
   virtual void ValidateSoil(const SoilState& /*soil*/, const std::string& /*field*/) const {}
+  // Makes the request definite before it is keyed: a tier that chooses something on the request's
+  // behalf (fe-ann: the surrogate model, when none is named) writes its choice into the request,
+  // so that the cache key says what was computed. Throws InputError naming field_prefix +
+  // "surrogate_model" for a model the tier does not take or know, PreconditionError when it has
+  // nothing to answer with. Cheap. Default: the request may name no surrogate model.
+  virtual void ResolveChoices(TractionRequest& request, const std::string& field_prefix) const;
 
   // Computes one curve: throws CancelledError when the tier notices `context` cancelled during the
   // work, InputError for requests the tier cannot take, NumericalError when the solver fails on a

@@ -1,6 +1,7 @@
 #include "solvers/common/traction.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "solvers/common/errors.h"
@@ -74,6 +75,11 @@ void TractionRequest::Validate() const {
   Require(PositiveFinite(wheel_load_n), "wheel_load_n", "must be a positive number of newtons");
   Require(!slips.empty(), "slips", "must hold at least one slip value");
   for (double s : slips) Require(std::isfinite(s) && s >= 0 && s <= 1, "slips", "each slip must lie in [0, 1]");
+  Require(surrogate_model.size() <= 64, "surrogate_model", "must be at most 64 characters");
+  for (char c : surrogate_model) {
+    Require(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.',
+            "surrogate_model", "must be a model id: letters, digits, '-', '_' and '.'");
+  }
 }
 
 std::vector<double> TractionRequest::SlipSweep(double step) {

@@ -60,6 +60,9 @@ struct TractionRequest {
   TyreGeometry tyre;
   double wheel_load_n = 0;       // vertical load on the wheel [W], N
   std::vector<double> slips;     // slip values s = 1 - V/(omega r), each in [0, 1]
+  // The registered surrogate model that answers for the soil (the fe-ann tier); empty: the tier's
+  // choice, written here before the request is keyed (TractionTier::ResolveChoices).
+  std::string surrogate_model;
 
   void Validate() const;
   // Evenly spaced slips 0, step, 2 step, ... up to and including 1 (or the last point below it).

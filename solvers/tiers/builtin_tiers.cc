@@ -4,8 +4,10 @@
 
 #include "solvers/tiers/bekker_tier.h"
 #include "solvers/tiers/empirical_tier.h"
+#include "solvers/tiers/fe_ann_tier.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "solvers/tiers/fe_classic_tier.h"
+#include "solvers/tiers/surrogate_registry.h"
 
 namespace gonogo {
 
@@ -18,6 +20,16 @@ void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& opti
   fe_de.threads = options.fe_de_threads;
   fe_de.checkpoint_every_s = options.fe_de_checkpoint_every_s;
   registry.Register(std::make_unique<tiers::FeDeTier>(fe_de));
+  tiers::FeAnnOptions fe_ann;
+  fe_ann.fe_de = fe_de;
+  std::shared_ptr<const tiers::SurrogateModelSource> models;
+  if (options.models_dir.empty()) {
+    models = std::make_shared<tiers::ListedSurrogateModels>(
+        std::vector<tiers::SurrogateModelRecord>{});
+  } else {
+    models = std::make_shared<tiers::SurrogateRegistry>(options.models_dir);
+  }
+  registry.Register(std::make_unique<tiers::FeAnnTier>(fe_ann, models));
 }
 
 }  // namespace gonogo

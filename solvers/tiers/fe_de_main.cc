@@ -487,7 +487,7 @@ int main(int argc, char** argv) {
   app.add_option("--slip-step", line.slip_step, "slips 0, step, ... 1")
       ->check(finite)
       ->capture_default_str();
-  app.add_option("--preset", line.preset, "default or ci")->capture_default_str();
+  app.add_option("--preset", line.preset, "default, ci or tiny")->capture_default_str();
   app.add_option("--elements-per-radius", line.elements_per_radius, "R / h")->check(finite);
   app.add_option("--fe-time-step", line.fe_time_step_s, "FE step by mass scaling, s")
       ->check(finite);

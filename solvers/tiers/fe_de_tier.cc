@@ -24,7 +24,7 @@ FeDeOptions FeDeOptions::Preset(const std::string& name) {
   FeDeOptions options;
   options.preset = name;
   if (name == "default") return options;
-  if (name == "ci") {
+  if (name == "ci" || name == "tiny") {
     options.elements_per_radius = 2;
     options.procedure.gravity_settle_s = 0.1;
     options.procedure.load_settle_s = 0.2;
@@ -34,13 +34,22 @@ FeDeOptions FeDeOptions::Preset(const std::string& name) {
     options.numerics.min_steps_per_increment = 5;
     options.numerics.relax_steps = 5;
     options.numerics.max_inertial_number = 1e-2;
+    if (name == "tiny") {
+      options.procedure.gravity_settle_s = 0.05;
+      options.procedure.load_settle_s = 0.1;
+      options.procedure.self_propelled_s = 0.1;
+      options.procedure.speed_ramp_up_s = 0.03;
+      options.procedure.slip_ramp_s = 0.2;
+    }
     return options;
   }
-  throw InputError("fe_de_preset", "unknown fe-de configuration '" + name + "'; known: default, ci");
+  throw InputError("fe_de_preset",
+                   "unknown fe-de configuration '" + name + "'; known: default, ci, tiny");
 }
 
 void FeDeOptions::Validate(const std::string& p) const {
-  Require(preset == "default" || preset == "ci", p + "preset", "must be default or ci");
+  Require(preset == "default" || preset == "ci" || preset == "tiny", p + "preset",
+          "must be default, ci or tiny");
   Require(std::isfinite(elements_per_radius) && elements_per_radius >= 2 &&
               elements_per_radius <= 50,
           p + "elements_per_radius", "must lie in [2, 50]");
@@ -71,7 +80,7 @@ TierDescription FeDeTier::Describe() const {
           "seed 001's drawbar-pull procedure (" + options_.preset + " configuration)",
           "soil name (dem-hertz-mindlin catalogue rows) or dem-hertz-mindlin parameters; tyre "
           "diameter and width; wheel load",
-          options_.preset == "ci" ? "minutes on 2 cores" : "hours on a few cores",
+          options_.preset == "default" ? "hours on a few cores" : "minutes on 2 cores",
           {"dem-hertz-mindlin"}};
 }
 
@@ -79,7 +88,7 @@ TierNeeds FeDeTier::Needs(const TractionRequest& /*request*/) const {
   TierNeeds needs;
   needs.ranks = options_.ranks;
   needs.threads = options_.threads;
-  needs.expected_seconds = options_.preset == "ci" ? 180 : 4 * 3600;
+  needs.expected_seconds = options_.preset == "default" ? 4 * 3600 : 180;
   return needs;
 }
 
@@ -145,7 +154,7 @@ TractionCurve FeDeTier::ComputeCurve(const TractionRequest& request,
 
 bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& context,
                          const BinWork& work, FeDeRunFigures* figures,
-                         std::shared_ptr<const material::ConstitutiveModel> continuum) const {
+                         const BinModel& bin_model) const {
   const auto start = std::chrono::steady_clock::now();
   dem::rve::RveMaterialParams params =
       dem::rve::RveMaterialParamsFromSoil(soil, options_.numerics, "soil.parameters");
@@ -153,7 +162,7 @@ bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& conte
   // the same wherever it lives.
   const std::shared_ptr<const dem::rve::RveMaterial> rve = dem::rve::SharedRveMaterial(params);
 
-  const MPI_Comm communicator = continuum ? MPI_COMM_NULL : context.communicator;
+  const MPI_Comm communicator = bin_model.alone() ? MPI_COMM_NULL : context.communicator;
   int group_rank = 0;
   if (communicator != MPI_COMM_NULL) MPI_Comm_rank(communicator, &group_rank);
   if (group_rank != 0) {
@@ -169,7 +178,14 @@ bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& conte
 
   std::shared_ptr<bridge::RankGroupLink> link;
   std::shared_ptr<const bridge::DistributedModel> distributed;
-  std::shared_ptr<const material::ConstitutiveModel> model = continuum ? continuum : rve;
+  std::shared_ptr<const material::ConstitutiveModel> model = rve;
+  std::function<std::string(const std::string&)> state_from_rve;
+  if (bin_model.continuum) model = bin_model.continuum;
+  if (bin_model.stand_in) {
+    PointStandIn stand_in = bin_model.stand_in(rve);
+    model = std::move(stand_in.model);
+    state_from_rve = std::move(stand_in.state_from_rve);
+  }
   figures->ranks = 1;
   if (communicator != MPI_COMM_NULL) {
     link = std::make_shared<bridge::RankGroupLink>(communicator);
@@ -189,11 +205,12 @@ bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& conte
   // states reach their owners as bytes).
   const double unit_weight_n_m3 = bin_soil.density_kg_m3 * units::kStandardGravityMps2;
   const double floor_pa = options_.min_initial_pressure_pa;
-  if (!continuum) {  // (a continuum soil starts unstressed and settles under gravity)
-    bin_soil.initial_state_at_depth = [rve, unit_weight_n_m3, floor_pa](double depth_m) {
+  if (!bin_model.continuum) {  // (a continuum soil starts unstressed and settles under gravity)
+    bin_soil.initial_state_at_depth = [rve, unit_weight_n_m3, floor_pa,
+                                       state_from_rve](double depth_m) {
       dem::rve::Rve settled = rve->initial();
       settled.SettleIsotropic(std::max(floor_pa, unit_weight_n_m3 * depth_m));
-      return settled.Save();
+      return state_from_rve ? state_from_rve(settled.Save()) : settled.Save();
     };
   }
   rig::FeBinOptions fe_options;
@@ -264,8 +281,25 @@ FeDeRunReport FeDeTier::RunContinuumTwin(const TractionRequest& request,
     rig_options.checkpoint_dir.clear();
     RollWheel(request, bins, rig_options, &report);
   };
-  RunOnBins(soil, context, roll, &report, model);
+  BinModel bin_model;
+  bin_model.continuum = model;
+  RunOnBins(soil, context, roll, &report, bin_model);
   report.curve.tier = "fe-de-twin";
+  return report;
+}
+
+FeDeRunReport FeDeTier::RunWithStandIn(const TractionRequest& request,
+                                       const PointStandInFactory& make_stand_in,
+                                       const ComputeContext& context) const {
+  request.Validate();
+  const SoilParameters soil = ResolveSoil(request.soil, "soil");
+  FeDeRunReport report;
+  const auto roll = [&](const rig::SoilBinFactory& bins, rig::RigOptions& rig_options) {
+    RollWheel(request, bins, rig_options, &report);
+  };
+  BinModel bin_model;
+  bin_model.stand_in = make_stand_in;
+  RunOnBins(soil, context, roll, &report, bin_model);
   return report;
 }
 
@@ -282,9 +316,11 @@ FeDeBevameterReport FeDeTier::RunBevameter(
     rig_options.checkpoint_dir.clear();  // only the wheel bins checkpoint
     report.bevameter = rig::RunVirtualBevameter(bins, spec, rig_options);
   };
-  std::shared_ptr<const material::ConstitutiveModel> twin;
-  if (continuum_twin) twin = std::make_shared<const material::DruckerPrager>(*continuum_twin);
-  if (!RunOnBins(soil, context, test, &report, twin)) return {};
+  BinModel bin_model;
+  if (continuum_twin) {
+    bin_model.continuum = std::make_shared<const material::DruckerPrager>(*continuum_twin);
+  }
+  if (!RunOnBins(soil, context, test, &report, bin_model)) return {};
   return report;
 }
 

@@ -34,7 +34,7 @@ namespace gonogo::tiers {
 
 struct FeDeOptions {
   // Named configuration, part of the tier's version (so curves of two configurations never share
-  // a cache key): "default" or "ci".
+  // a cache key): "default", "ci" or "tiny".
   std::string preset = "default";
   double elements_per_radius = 4;  // FE resolution along the wheel path, R / h
   double fe_time_step_s = 5e-4;    // FE step, reached by mass scaling (seed 000: 5e-4 s)
@@ -55,7 +55,9 @@ struct FeDeOptions {
   // "default": R/4 mesh, seed 001's procedure, RveNumerics defaults (inertial number 1e-3, 20 + 50
   // DE steps per increment). "ci": a full curve in minutes on 2 cores: R/2 mesh, the procedure
   // shortened (0.1 + 0.2 s settling, 0.2 s rolling, 0.6 s slip ramp), 5 + 5 DE steps per
-  // increment, inertial number 1e-2.
+  // increment, inertial number 1e-2. "tiny": ci with the procedure cut to 0.45 s (0.05 + 0.1 s
+  // settling, 0.1 s rolling, 0.2 s slip ramp), a curve in well under a minute: the tests' and a
+  // smoke run's.
   static FeDeOptions Preset(const std::string& name);
   void Validate(const std::string& field_prefix) const;
 };
@@ -79,6 +81,17 @@ struct FeDeRunReport : FeDeRunFigures {
   int fe_steps = 0;
   double fe_time_step_s = 0;
 };
+
+// What answers at a bin's points in place of the distributed RVEs (the fe-ann tier's network),
+// built from the soil's template RVE; it runs alone, in this process.
+struct PointStandIn {
+  std::shared_ptr<const material::ConstitutiveModel> model;
+  // The stand-in's state (MaterialState bytes) for a point whose RVE would start as the RVE state
+  // `settled_rve_bytes` (the template settled at the stress of the point's depth).
+  std::function<std::string(const std::string& settled_rve_bytes)> state_from_rve;
+};
+using PointStandInFactory =
+    std::function<PointStandIn(std::shared_ptr<const dem::rve::RveMaterial> template_rve)>;
 
 // The virtual bevameter on the fe-de soil and its run.
 struct FeDeBevameterReport : FeDeRunFigures {
@@ -120,6 +133,13 @@ class FeDeTier : public TractionTier {
   FeDeRunReport RunContinuumTwin(const TractionRequest& request,
                                  const material::DruckerPragerParams& strength,
                                  const ComputeContext& context) const;
+  // Run with the RVEs replaced by what `make_stand_in` builds from the soil's template RVE, on the
+  // same rig, bins, geostatic start (each point's stand-in state made from the RVE its depth
+  // would start with), mass scaling and rim contact; alone, whatever the context's communicator.
+  // The curve's tier and version are the caller's to set.
+  FeDeRunReport RunWithStandIn(const TractionRequest& request,
+                               const PointStandInFactory& make_stand_in,
+                               const ComputeContext& context) const;
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
@@ -130,10 +150,15 @@ class FeDeTier : public TractionTier {
   // On group rank 0: builds the fe-de soil bins (the RVEs distributed over the context's group)
   // and the rig options of this configuration, calls `work` with them, fills `figures`, returns
   // true. On the other ranks: serves RVEs until rank 0 is done, returns false. With `continuum`
-  // set, the bins hold it instead of the RVEs, and the run is this process's alone.
+  // set, the bins hold it instead of the RVEs (unstressed, settling under gravity); with
+  // `stand_in` set, what it makes (geostatic); either way the run is this process's alone.
+  struct BinModel {
+    std::shared_ptr<const material::ConstitutiveModel> continuum;
+    PointStandInFactory stand_in;
+    bool alone() const { return continuum != nullptr || static_cast<bool>(stand_in); }
+  };
   bool RunOnBins(const SoilParameters& soil, const ComputeContext& context, const BinWork& work,
-                 FeDeRunFigures* figures,
-                 std::shared_ptr<const material::ConstitutiveModel> continuum = nullptr) const;
+                 FeDeRunFigures* figures, const BinModel& bin_model = {}) const;
   void RollWheel(const TractionRequest& request, const rig::SoilBinFactory& bins,
                  const rig::RigOptions& rig_options, FeDeRunReport* report) const;
 

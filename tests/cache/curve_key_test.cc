@@ -71,6 +71,16 @@ TEST(CurveKey, EveryInputChangesTheKey) {
   const std::string with_bekker = CurveKey("bekker", "b1", Quantise(r));
   r.soil.parameters->values["kphi"] *= 1.0001;
   EXPECT_NE(with_bekker, CurveKey("bekker", "b1", Quantise(r))) << "Bekker parameters";
+  r = Request();
+  r.surrogate_model = "sand-mlp-1";
+  EXPECT_NE(base, CurveKey("empirical", "e1", Quantise(r))) << "surrogate model";
+  EXPECT_NE(SimilarityGroup("empirical", "e1", Quantise(Request())),
+            SimilarityGroup("empirical", "e1", Quantise(r)))
+      << "surrogate model";
+  // Without a model the key is what it was before models existed: stored curves stay found.
+  EXPECT_EQ(base.find(";model="), std::string::npos);
+  EXPECT_EQ(SurrogateModelOfKey(base), "");
+  EXPECT_EQ(SurrogateModelOfKey(CurveKey("fe-ann", "a1", Quantise(r))), "sand-mlp-1");
 }
 
 }  // namespace

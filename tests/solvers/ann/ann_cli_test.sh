@@ -8,11 +8,11 @@ rm -rf "$out"
 mkdir -p "$out"
 OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 2 \
   --architecture 8 --epochs 2 --threads 1 --out "$out" > "$out/figures.csv" 2> "$out/progress.txt"
-grep -q '^mlp-8-tanh,3,2,[0-9][0-9]*,' "$out/figures.csv"
+grep -q '^mlp-8-tanh-anchored,3,2,[0-9][0-9]*,' "$out/figures.csv"
 test -s "$out/training.npy"
 test -s "$out/held_out.npy.columns.txt"
-for k in 0 1 2; do test -s "$out/mlp-8-tanh/member_$k.pt"; done
-test -s "$out/mlp-8-tanh/envelope.bin"
+for k in 0 1 2; do test -s "$out/mlp-8-tanh-anchored/member_$k.pt"; done
+test -s "$out/mlp-8-tanh-anchored/envelope.bin"
 for bad in 8xq 64a gruq; do
   if "$ann" --architecture "$bad" > /dev/null 2> "$out/error.txt"; then
     echo "--architecture $bad was accepted" >&2

@@ -28,8 +28,14 @@ const SurrogateEnsemble& Trained() {
     TrainingOptions options;
     options.epochs = 300;
     options.batch_size = 64;
+    // Unanchored: the material's seam and fallback are what this file tests, on the network its
+    // figures were first measured with. The anchored network (the default) drives the servo
+    // triaxial through the seam 13.5 % off the soil (unanchored 2.5 %), though it replays
+    // strain-driven paths closer (stress_surrogate_test); solvers/ann/README.md.
+    MlpArchitecture architecture;
+    architecture.anchored = false;
     return new SurrogateEnsemble(
-        SurrogateEnsemble::Train(TrainingPaths(), MlpArchitecture{}, options));
+        SurrogateEnsemble::Train(TrainingPaths(), architecture, options));
   }();
   return *ensemble;
 }

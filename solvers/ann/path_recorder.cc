@@ -1,0 +1,122 @@
+#include "solvers/ann/path_recorder.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::ann {
+
+struct PathRecorder::Step {
+  Matrix3 increment = Matrix3::Zero();
+  Vector6 stress_pa = Vector6::Zero();
+  std::shared_ptr<const Step> previous;
+  ~Step() {  // unlinks its chain iteratively (no deep recursion on long paths)
+    std::shared_ptr<const Step> next = std::move(previous);
+    while (next && next.use_count() == 1) {
+      std::shared_ptr<const Step> tail = std::move(const_cast<Step&>(*next).previous);
+      next = std::move(tail);
+    }
+  }
+};
+
+namespace {
+
+class RecordedState : public material::MaterialState {
+ public:
+  std::unique_ptr<material::MaterialState> Clone() const override {
+    auto copy = std::make_unique<RecordedState>();
+    copy->inner = inner->Clone();
+    copy->point = point;
+    copy->path = path;
+    return copy;
+  }
+  std::string Serialize() const override { return inner->Serialize(); }
+
+  std::unique_ptr<material::MaterialState> inner;
+  std::int64_t point = 0;
+  std::shared_ptr<const PathRecorder::Step> path;
+};
+
+}  // namespace
+
+PathRecorder::PathRecorder(std::shared_ptr<const material::ConstitutiveModel> inner)
+    : inner_(std::move(inner)) {
+  if (inner_ == nullptr) throw InputError("inner", "a model to record is required");
+}
+
+std::unique_ptr<material::MaterialState> PathRecorder::Wrap(
+    std::unique_ptr<material::MaterialState> inner) const {
+  material::PointIncrement zero;
+  zero.committed = inner.get();
+  const std::vector<material::PointResponse> start = inner_->Update({zero}, false);
+  if (start.at(0).status != material::UpdateStatus::kOk) {
+    throw NumericalError("recorded model: a zero increment on a point's start failed: " +
+                         start.at(0).reason);
+  }
+  auto state = std::make_unique<RecordedState>();
+  state->inner = std::move(inner);
+  std::lock_guard<std::mutex> lock(mutex_);
+  state->point = next_point_++;
+  initial_stress_pa_[state->point] = start.at(0).stress_pa;
+  return state;
+}
+
+std::unique_ptr<material::MaterialState> PathRecorder::InitialState() const {
+  return Wrap(inner_->InitialState());
+}
+
+std::unique_ptr<material::MaterialState> PathRecorder::RestoreState(const std::string& bytes) const {
+  return Wrap(inner_->RestoreState(bytes));
+}
+
+material::ElasticModuli PathRecorder::InitialElasticModuli() const {
+  return inner_->InitialElasticModuli();
+}
+
+std::vector<material::PointResponse> PathRecorder::Update(
+    const std::vector<material::PointIncrement>& increments, bool want_tangent) const {
+  std::vector<material::PointIncrement> inner_increments(increments.size());
+  for (std::size_t i = 0; i < increments.size(); ++i) {
+    const auto& committed = static_cast<const RecordedState&>(*increments[i].committed);
+    inner_increments[i] = {increments[i].displacement_gradient_increment, committed.inner.get()};
+  }
+  std::vector<material::PointResponse> responses = inner_->Update(inner_increments, want_tangent);
+  std::vector<std::pair<std::int64_t, std::shared_ptr<const Step>>> recorded;
+  for (std::size_t i = 0; i < increments.size(); ++i) {
+    if (responses[i].status != material::UpdateStatus::kOk) continue;
+    const auto& committed = static_cast<const RecordedState&>(*increments[i].committed);
+    auto step = std::make_shared<Step>();
+    step->increment = increments[i].displacement_gradient_increment;
+    step->stress_pa = material::StressToVoigt(responses[i].stress_pa);
+    step->previous = committed.path;
+    auto next = std::make_unique<RecordedState>();
+    next->inner = std::move(responses[i].state);
+    next->point = committed.point;
+    next->path = step;
+    responses[i].state = std::move(next);
+    recorded.emplace_back(committed.point, std::move(step));
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [point, step] : recorded) newest_[point] = std::move(step);
+  return responses;
+}
+
+std::vector<StrainHistory> PathRecorder::Histories() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<StrainHistory> histories;
+  for (const auto& [point, newest] : newest_) {
+    StrainHistory history;
+    history.initial_stress_pa = initial_stress_pa_.at(point);
+    for (const Step* step = newest.get(); step != nullptr; step = step->previous.get()) {
+      history.increments.push_back(step->increment);
+      history.stresses_pa.push_back(step->stress_pa);
+    }
+    std::reverse(history.increments.begin(), history.increments.end());
+    std::reverse(history.stresses_pa.begin(), history.stresses_pa.end());
+    histories.push_back(std::move(history));
+  }
+  return histories;
+}
+
+}  // namespace gonogo::ann

@@ -1,0 +1,185 @@
+#include "solvers/tiers/fe_ann_tier.h"
+
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "solvers/ann/ann_material.h"
+#include "solvers/common/errors.h"
+
+namespace gonogo::tiers {
+
+namespace {
+
+constexpr char kTrainHint[] =
+    "train and register one with `gonogo-ann --soil NAME --preset PRESET --register DATA_DIR` "
+    "(solvers/ann/README.md)";
+
+}  // namespace
+
+void FeAnnOptions::Validate(const std::string& p) const {
+  fe_de.Validate(p + "fe_de.");
+  Require(std::isfinite(distance_threshold) && distance_threshold >= 0, p + "distance_threshold",
+          "must be >= 0 (0: the model's own)");
+  Require(std::isfinite(spread_threshold) && spread_threshold >= 0, p + "spread_threshold",
+          "must be >= 0 (0: the model's own)");
+}
+
+FeAnnTier::FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelSource> models)
+    : options_(std::move(options)), fe_de_(options_.fe_de), models_(std::move(models)) {
+  options_.Validate("fe_ann.");
+  if (models_ == nullptr) throw InputError("fe_ann.models", "a model source is required");
+}
+
+std::string FeAnnTier::Version() const {
+  // The fallback and the thresholds change what a model answers; the model's id is in the key.
+  std::string version = "fe-ann-1";
+  if (options_.fe_de.preset != "default") version += "-" + options_.fe_de.preset;
+  if (!options_.fallback_enabled) version += "-nofallback";
+  if (options_.distance_threshold > 0 || options_.spread_threshold > 0) {
+    char text[64];
+    std::snprintf(text, sizeof text, "-d%.4g-s%.4g", options_.distance_threshold,
+                  options_.spread_threshold);
+    version += text;
+  }
+  return version;
+}
+
+TierDescription FeAnnTier::Describe() const {
+  return {"the fe-de rig and soil bin with a neural surrogate of the soil's RVE (an ensemble of "
+          "networks, libtorch) at every integration point, falling back to the RVE where an input "
+          "leaves the training envelope (" + options_.fe_de.preset + " configuration)",
+          "soil name (dem-hertz-mindlin catalogue rows) or parameters, with a registered "
+          "surrogate model for them; tyre diameter and width; wheel load",
+          "seconds to minutes on one core (more where points fall back)",
+          {"dem-hertz-mindlin"}};
+}
+
+TierNeeds FeAnnTier::Needs(const TractionRequest& /*request*/) const {
+  TierNeeds needs;
+  needs.ranks = 1;
+  needs.threads = options_.fe_de.threads;
+  needs.expected_seconds = options_.fe_de.preset == "default" ? 600 : 20;
+  return needs;
+}
+
+void FeAnnTier::ValidateSoil(const SoilState& soil, const std::string& field) const {
+  fe_de_.ValidateSoil(soil, field);
+}
+
+SurrogateModelRecord FeAnnTier::Choose(const TractionRequest& request,
+                                       const std::string& prefix) const {
+  const std::string soil =
+      CanonicalText(fe_de_.ResolveSoil(request.soil, prefix + "soil"));
+  const std::string& preset = options_.fe_de.preset;
+  if (!request.surrogate_model.empty()) {
+    const std::optional<SurrogateModelRecord> named = models_->Find(request.surrogate_model);
+    Require(named.has_value(), prefix + "surrogate_model",
+            "no registered model '" + request.surrogate_model + "' (gonogo models lists them)");
+    Require(named->soil_parameters == soil, prefix + "surrogate_model",
+            "model '" + named->id + "' was trained on another soil");
+    Require(named->fe_de_preset == preset, prefix + "surrogate_model",
+            "model '" + named->id + "' was trained on RVEs of the " + named->fe_de_preset +
+                " configuration; this server runs " + preset);
+    return *named;
+  }
+  const std::optional<SurrogateModelRecord> best = models_->Best(soil, preset);
+  if (!best) {
+    throw PreconditionError(prefix + "surrogate_model",
+                            "no surrogate model is registered for this soil at the " + preset +
+                                " configuration; " + kTrainHint);
+  }
+  return *best;
+}
+
+void FeAnnTier::ResolveChoices(TractionRequest& request, const std::string& prefix) const {
+  request.surrogate_model = Choose(request, prefix).id;
+}
+
+std::shared_ptr<const ann::SurrogateEnsemble> FeAnnTier::Load(
+    const SurrogateModelRecord& record) const {
+  std::lock_guard<std::mutex> lock(loaded_mutex_);
+  auto it = loaded_.find(record.id);
+  if (it != loaded_.end()) return it->second;
+  auto ensemble =
+      std::make_shared<ann::SurrogateEnsemble>(ann::SurrogateEnsemble::Load(record.directory));
+  if (options_.distance_threshold > 0 || options_.spread_threshold > 0) {
+    ensemble->SetThresholds(options_.distance_threshold > 0 ? options_.distance_threshold
+                                                            : ensemble->distance_threshold(),
+                            options_.spread_threshold > 0 ? options_.spread_threshold
+                                                          : ensemble->spread_threshold());
+  }
+  loaded_[record.id] = ensemble;
+  return ensemble;
+}
+
+AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& context) const {
+  request.Validate();
+  const SurrogateModelRecord record = Choose(request, "");
+  const auto load_start = std::chrono::steady_clock::now();
+  const std::shared_ptr<const ann::SurrogateEnsemble> ensemble = Load(record);
+  const double load_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
+
+  ann::AnnMaterialOptions material_options;
+  material_options.fallback_enabled = options_.fallback_enabled;
+  std::shared_ptr<const ann::AnnMaterial> material;
+  const PointStandInFactory make_stand_in =
+      [&](std::shared_ptr<const dem::rve::RveMaterial> template_rve) {
+        material = std::make_shared<const ann::AnnMaterial>(ensemble, template_rve,
+                                                            material_options);
+        PointStandIn stand_in;
+        stand_in.model = material;
+        stand_in.state_from_rve = [material](const std::string& settled_rve_bytes) {
+          return material->StateFrom(settled_rve_bytes)->Serialize();
+        };
+        return stand_in;
+      };
+  ComputeContext alone = context;
+  alone.communicator = MPI_COMM_NULL;
+  AnnRunReport report;
+  static_cast<FeDeRunReport&>(report) = fe_de_.RunWithStandIn(request, make_stand_in, alone);
+  report.curve.tier = Name();
+  report.curve.tier_version = Version();
+  report.model_id = record.id;
+  report.model_load_seconds = load_seconds;
+  if (material) {
+    const ann::FallbackLog& log = material->log();
+    for (const ann::FallbackLog::Event& event : log.fallbacks()) {
+      report.fallback_steps.push_back(event.point_step);
+    }
+    report.fallbacks = static_cast<int>(report.fallback_steps.size());
+    report.unanswered_flags = log.unanswered_flags();
+    report.network_seconds = log.network_seconds();
+    report.network_point_updates = log.network_point_updates();
+    report.fallback_seconds = log.fallback_seconds();
+  }
+  return report;
+}
+
+TractionCurve FeAnnTier::ComputeCurve(const TractionRequest& request,
+                                      const ComputeContext& context) const {
+  int group_rank = 0;
+  if (context.communicator != MPI_COMM_NULL) MPI_Comm_rank(context.communicator, &group_rank);
+  if (group_rank != 0) return {};  // one rank computes; a group's others have nothing to do
+  return Run(request, context).curve;
+}
+
+std::optional<SurrogateModelRecord> ListedSurrogateModels::Find(const std::string& id) const {
+  for (const SurrogateModelRecord& record : records_) {
+    if (record.id == id) return record;
+  }
+  return std::nullopt;
+}
+
+std::optional<SurrogateModelRecord> ListedSurrogateModels::Best(
+    const std::string& soil_parameters, const std::string& fe_de_preset) const {
+  for (const SurrogateModelRecord& record : records_) {
+    if (record.soil_parameters == soil_parameters && record.fe_de_preset == fe_de_preset) {
+      return record;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace gonogo::tiers

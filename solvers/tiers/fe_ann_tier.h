@@ -1,0 +1,120 @@
+// The "fe-ann" traction tier (seed 000's FE-ANN): the fe-de tier's rig, bins and geostatic start
+// (fe_de_tier.h) with every RVE replaced by a registered surrogate ensemble of the soil's RVE
+// (solvers/ann/ann_material.h), which falls back to the RVE itself at a point whose input leaves
+// what the ensemble was trained on.
+//
+// Models: a SurrogateModelSource (the service's registry, cache/model_store.h; a directory in
+// tests) says which models exist for a soil and fe-de configuration. A request names one
+// (TractionRequest::surrogate_model) or gets the source's best for its soil (ResolveChoices
+// writes that choice into the request before it is keyed); a soil with no model is a
+// PreconditionError naming the command that trains one.
+//
+// A point starts as its fe-de RVE would (the template settled at the stress of its depth) and,
+// when flagged, replays its increments on that RVE (the fallback) and stays on it. The curve's
+// figures (AnnRunReport) say how many points fell back, at which step, and where the time went.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/surrogate_ensemble.h"
+#include "solvers/tiers/fe_de_tier.h"
+
+namespace gonogo::tiers {
+
+// What the tier needs to know of a registered model.
+struct SurrogateModelRecord {
+  std::string id;
+  std::string directory;  // SurrogateEnsemble::Save's
+  // The canonical text (CanonicalText of solvers/common/soil_model.h) of the dem-hertz-mindlin
+  // parameter set whose RVE made its training data, and the fe-de configuration whose RVE
+  // numerics did: a model answers only for that soil and configuration.
+  std::string soil_parameters;
+  std::string fe_de_preset;
+};
+
+class SurrogateModelSource {
+ public:
+  virtual ~SurrogateModelSource() = default;
+  // The model `id`, or nullopt.
+  virtual std::optional<SurrogateModelRecord> Find(const std::string& id) const = 0;
+  // The best model (lowest held-out error) for the soil and configuration, or nullopt.
+  virtual std::optional<SurrogateModelRecord> Best(const std::string& soil_parameters,
+                                                   const std::string& fe_de_preset) const = 0;
+};
+
+struct FeAnnOptions {
+  FeDeOptions fe_de;  // the rig, mesh, procedure and RVE numerics (its preset names them)
+  bool fallback_enabled = true;
+  // Flag thresholds (surrogate_ensemble.h); 0: the model's own.
+  double distance_threshold = 0;
+  double spread_threshold = 0;
+  void Validate(const std::string& field_prefix) const;
+};
+
+// One fe-ann curve and its run.
+struct AnnRunReport : FeDeRunReport {
+  std::string model_id;
+  // Fallbacks made, and the step of its point's own history at which each was. A point falls
+  // back once; an update its caller discarded counts too (FallbackLog), so this is at least the
+  // number of points that fell back.
+  int fallbacks = 0;
+  std::vector<std::int64_t> fallback_steps;
+  std::int64_t unanswered_flags = 0;  // with the fallback off
+  double network_seconds = 0;         // the ensemble's batched calls
+  std::int64_t network_point_updates = 0;
+  double fallback_seconds = 0;        // replays and points on the RVE
+  double model_load_seconds = 0;
+};
+
+class FeAnnTier : public TractionTier {
+ public:
+  FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelSource> models);
+
+  std::string Name() const override { return "fe-ann"; }
+  std::string Version() const override;
+  bool UsesConeIndex() const override { return false; }
+  bool UsesSoilName() const override { return true; }
+  TierDescription Describe() const override;
+  TierNeeds Needs(const TractionRequest& request) const override;
+  void ValidateSoil(const SoilState& soil, const std::string& field) const override;
+  void ResolveChoices(TractionRequest& request, const std::string& field_prefix) const override;
+
+  const FeAnnOptions& options() const { return options_; }
+  // Compute, with the run's figures; the request's model as ResolveChoices leaves it.
+  AnnRunReport Run(TractionRequest request, const ComputeContext& context) const;
+
+ protected:
+  TractionCurve ComputeCurve(const TractionRequest& request,
+                             const ComputeContext& context) const override;
+
+ private:
+  SurrogateModelRecord Choose(const TractionRequest& request, const std::string& prefix) const;
+  std::shared_ptr<const ann::SurrogateEnsemble> Load(const SurrogateModelRecord& record) const;
+
+  FeAnnOptions options_;
+  FeDeTier fe_de_;
+  std::shared_ptr<const SurrogateModelSource> models_;
+  mutable std::mutex loaded_mutex_;
+  mutable std::map<std::string, std::shared_ptr<const ann::SurrogateEnsemble>> loaded_;  // by id
+};
+
+// A SurrogateModelSource over a fixed list (tests, the gonogo-ann command).
+class ListedSurrogateModels : public SurrogateModelSource {
+ public:
+  explicit ListedSurrogateModels(std::vector<SurrogateModelRecord> records)
+      : records_(std::move(records)) {}
+  std::optional<SurrogateModelRecord> Find(const std::string& id) const override;
+  // The first listed for the soil and configuration.
+  std::optional<SurrogateModelRecord> Best(const std::string& soil_parameters,
+                                           const std::string& fe_de_preset) const override;
+
+ private:
+  std::vector<SurrogateModelRecord> records_;
+};
+
+}  // namespace gonogo::tiers

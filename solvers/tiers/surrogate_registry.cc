@@ -1,0 +1,214 @@
+#include "solvers/tiers/surrogate_registry.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "solvers/common/errors.h"
+
+namespace gonogo::tiers {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kRecordFile[] = "model.txt";
+constexpr char kRecordHeader[] = "# gonogo surrogate model 1";
+
+std::string Number(double value) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+// One "key = value" per line; held-out errors as "held_out = <error> <path>".
+std::string RecordText(const RegisteredSurrogate& r) {
+  std::ostringstream out;
+  out << kRecordHeader << "\n"
+      << "id = " << r.id << "\n"
+      << "soil_name = " << r.soil_name << "\n"
+      << "soil_parameters = " << r.soil_parameters << "\n"
+      << "fe_de_preset = " << r.fe_de_preset << "\n"
+      << "architecture = " << r.architecture << "\n"
+      << "members = " << r.members << "\n"
+      << "data_hash = " << r.data_hash << "\n"
+      << "samples = " << r.samples << "\n"
+      << "distance_threshold = " << Number(r.distance_threshold) << "\n"
+      << "spread_threshold = " << Number(r.spread_threshold) << "\n"
+      << "worst_held_out_error = " << Number(r.worst_held_out_error) << "\n"
+      << "training_seconds = " << Number(r.training_seconds) << "\n"
+      << "from_model = " << r.from_model << "\n"
+      << "code_version = " << r.code_version << "\n"
+      << "created_unix_ms = " << r.created_unix_ms << "\n";
+  for (const HeldOutResult& result : r.held_out) {
+    out << "held_out = " << Number(result.replay_error) << " " << result.path << "\n";
+  }
+  return out.str();
+}
+
+// nullopt for a directory that is not a model (no record, or not one this code reads).
+std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
+  std::ifstream in(directory / kRecordFile);
+  std::string line;
+  if (!in || !std::getline(in, line) || line != kRecordHeader) return std::nullopt;
+  std::map<std::string, std::string> values;
+  RegisteredSurrogate r;
+  try {
+    while (std::getline(in, line)) {
+      const std::size_t equals = line.find(" = ");
+      if (equals == std::string::npos) return std::nullopt;
+      const std::string key = line.substr(0, equals), value = line.substr(equals + 3);
+      if (key == "held_out") {
+        const std::size_t space = value.find(' ');
+        if (space == std::string::npos) return std::nullopt;
+        r.held_out.push_back({value.substr(space + 1), std::stod(value.substr(0, space))});
+      } else {
+        values[key] = value;
+      }
+    }
+    r.id = values.at("id");
+    r.soil_name = values.at("soil_name");
+    r.soil_parameters = values.at("soil_parameters");
+    r.fe_de_preset = values.at("fe_de_preset");
+    r.architecture = values.at("architecture");
+    r.members = std::stoi(values.at("members"));
+    r.data_hash = values.at("data_hash");
+    r.samples = std::stoll(values.at("samples"));
+    r.distance_threshold = std::stod(values.at("distance_threshold"));
+    r.spread_threshold = std::stod(values.at("spread_threshold"));
+    r.worst_held_out_error = std::stod(values.at("worst_held_out_error"));
+    r.training_seconds = std::stod(values.at("training_seconds"));
+    r.from_model = values.at("from_model");
+    r.code_version = values.at("code_version");
+    r.created_unix_ms = std::stoll(values.at("created_unix_ms"));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (r.id != directory.filename().string()) return std::nullopt;
+  r.directory = directory.string();
+  return r;
+}
+
+}  // namespace
+
+void ValidateModelId(const std::string& id, const std::string& field) {
+  Require(!id.empty() && id.size() <= 64, field, "must be 1 to 64 characters");
+  Require(id.front() != '.', field, "must not start with '.'");
+  for (char c : id) {
+    Require(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.',
+            field, "must be letters, digits, '-', '_' and '.'");
+  }
+}
+
+SurrogateRegistry::SurrogateRegistry(std::string root) : root_(std::move(root)) {
+  Require(!root_.empty(), "models_dir", "is required");
+}
+
+std::optional<RegisteredSurrogate> SurrogateRegistry::Describe(const std::string& id) const {
+  try {
+    ValidateModelId(id, "model");
+  } catch (const InputError&) {
+    return std::nullopt;  // no such model can exist
+  }
+  return ReadRecord(fs::path(root_) / id);
+}
+
+std::optional<SurrogateModelRecord> SurrogateRegistry::Find(const std::string& id) const {
+  std::optional<RegisteredSurrogate> found = Describe(id);
+  if (!found) return std::nullopt;
+  return static_cast<SurrogateModelRecord>(*found);
+}
+
+std::vector<RegisteredSurrogate> SurrogateRegistry::List(const std::string& soil_name) const {
+  std::vector<RegisteredSurrogate> models;
+  std::error_code error;
+  if (!fs::is_directory(root_, error)) return models;
+  for (const fs::directory_entry& entry : fs::directory_iterator(root_, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.front() == '.' || !entry.is_directory(error)) continue;
+    std::optional<RegisteredSurrogate> model = ReadRecord(entry.path());
+    if (model && (soil_name.empty() || model->soil_name == soil_name)) {
+      models.push_back(std::move(*model));
+    }
+  }
+  std::sort(models.begin(), models.end(),
+            [](const RegisteredSurrogate& a, const RegisteredSurrogate& b) {
+              return a.created_unix_ms != b.created_unix_ms ? a.created_unix_ms > b.created_unix_ms
+                                                            : a.id < b.id;
+            });
+  return models;
+}
+
+std::optional<SurrogateModelRecord> SurrogateRegistry::Best(const std::string& soil_parameters,
+                                                            const std::string& fe_de_preset) const {
+  std::optional<RegisteredSurrogate> best;
+  for (RegisteredSurrogate& model : List()) {  // newest first: ties go to the newest
+    if (model.soil_parameters != soil_parameters || model.fe_de_preset != fe_de_preset) continue;
+    if (!best || model.worst_held_out_error < best->worst_held_out_error) best = std::move(model);
+  }
+  if (!best) return std::nullopt;
+  return static_cast<SurrogateModelRecord>(*best);
+}
+
+std::string SurrogateRegistry::NewId(const std::string& soil_name,
+                                     const std::string& architecture) const {
+  std::string stem;
+  for (char c : soil_name + "-" + architecture) {
+    const bool kept = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+    stem += kept ? c : '-';
+  }
+  if (stem.size() > 48) stem.resize(48);
+  if (stem.empty() || stem.front() == '-') stem = "model" + stem;
+  for (int n = 1;; ++n) {
+    const std::string id = stem + "-" + std::to_string(n);
+    if (!fs::exists(fs::path(root_) / id)) return id;
+  }
+}
+
+RegisteredSurrogate SurrogateRegistry::Register(RegisteredSurrogate record,
+                                                const ann::SurrogateEnsemble& ensemble) const {
+  ValidateModelId(record.id, "model.id");
+  fs::create_directories(root_);
+  const fs::path final_path = fs::path(root_) / record.id;
+  Require(!fs::exists(final_path), "model.id", "a model '" + record.id + "' is registered already");
+  const fs::path staging =
+      fs::path(root_) / ("." + record.id + ".registering." + std::to_string(::getpid()));
+  fs::remove_all(staging);
+  ensemble.Save(staging.string());
+  record.directory = final_path.string();
+  {
+    std::ofstream out(staging / kRecordFile, std::ios::trunc);
+    out << RecordText(record);
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + (staging / kRecordFile).string());
+  }
+  std::error_code error;
+  fs::rename(staging, final_path, error);  // atomic; fails when the id was taken meanwhile
+  if (error) {
+    fs::remove_all(staging);
+    throw InputError("model.id", "a model '" + record.id + "' is registered already");
+  }
+  return record;
+}
+
+int SurrogateRegistry::CollectAbandoned() const {
+  int removed = 0;
+  std::error_code error;
+  if (!fs::is_directory(root_, error)) return 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(root_, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind('.', 0) == 0 && name.find(".registering.") != std::string::npos) {
+      fs::remove_all(entry.path(), error);
+      ++removed;
+    }
+  }
+  return removed;
+}
+
+}  // namespace gonogo::tiers

@@ -1,0 +1,72 @@
+// The registry of the fe-ann tier's surrogate models, in the service's data directory:
+// <root>/<id>/ holds one ensemble (SurrogateEnsemble::Save: member_<k>.pt, envelope.bin) and its
+// record, model.txt, with its provenance: the soil it was trained for, the fe-de configuration whose
+// RVE numerics made its data, the architecture, the hash and size of the training data, the
+// envelope's thresholds, the held-out errors, the training time, the model it was fine-tuned from,
+// when and by which code. A directory is the registry because every rank of the pool reads it (as
+// the fe-de checkpoints: a file system the ranks share), with no database connection per rank.
+//
+// Registration is atomic: the files are written to a hidden directory that is then renamed to
+// <root>/<id>; an id is never reused. Hidden directories left by a crash are not models and are
+// removed by CollectAbandoned.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/surrogate_ensemble.h"
+#include "solvers/tiers/fe_ann_tier.h"
+#include "solvers/tiers/surrogate_training.h"
+
+namespace gonogo::tiers {
+
+struct RegisteredSurrogate : SurrogateModelRecord {
+  std::string soil_name;  // the catalogue name it was trained for ("" for explicit parameters)
+  std::string architecture;
+  int members = 0;
+  std::string data_hash;
+  std::int64_t samples = 0;
+  double distance_threshold = 0;
+  double spread_threshold = 0;
+  std::vector<HeldOutResult> held_out;
+  double worst_held_out_error = 0;
+  double training_seconds = 0;
+  std::string from_model;  // "" unless fine-tuned
+  std::string code_version;
+  std::int64_t created_unix_ms = 0;
+};
+
+class SurrogateRegistry : public SurrogateModelSource {
+ public:
+  explicit SurrogateRegistry(std::string root);
+
+  std::optional<SurrogateModelRecord> Find(const std::string& id) const override;
+  // The smallest worst held-out error, the newest among equals.
+  std::optional<SurrogateModelRecord> Best(const std::string& soil_parameters,
+                                           const std::string& fe_de_preset) const override;
+  std::optional<RegisteredSurrogate> Describe(const std::string& id) const;
+  // Every model, newest first; `soil_name` non-empty: that soil's.
+  std::vector<RegisteredSurrogate> List(const std::string& soil_name = "") const;
+
+  // Writes `ensemble` and `record` (its directory set here) as model record.id. Throws
+  // InputError("model.id", ...) for a malformed or taken id.
+  RegisteredSurrogate Register(RegisteredSurrogate record,
+                               const ann::SurrogateEnsemble& ensemble) const;
+  // A fresh id for a model of `soil_name` and `architecture`: "<soil>-<architecture>-<n>".
+  std::string NewId(const std::string& soil_name, const std::string& architecture) const;
+  // Removes what a crash mid-registration left; returns how many.
+  int CollectAbandoned() const;
+
+  const std::string& root() const { return root_; }
+
+ private:
+  std::string root_;
+};
+
+// Throws InputError(field, ...) unless `id` is 1-64 letters, digits, '-', '_' and '.', not
+// starting with '.'.
+void ValidateModelId(const std::string& id, const std::string& field);
+
+}  // namespace gonogo::tiers

@@ -1,0 +1,212 @@
+#include "solvers/tiers/surrogate_training.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "solvers/ann/path_recorder.h"
+#include "solvers/common/errors.h"
+#include "solvers/dem/rve/rve_material.h"
+#include "solvers/dem/rve/rve_soil.h"
+
+namespace gonogo::tiers {
+
+namespace {
+
+ann::LabPathSpec Spec(ann::LabPath path, double pressure_pa, double max_strain, int steps,
+                      std::uint64_t seed = 1) {
+  ann::LabPathSpec spec;
+  spec.path = path;
+  spec.pressure_pa = pressure_pa;
+  spec.max_strain = max_strain;
+  spec.steps = steps;
+  spec.seed = seed;
+  spec.walk_step_strain = 1e-3;
+  return spec;
+}
+
+std::string Kpa(double pressure_pa) {
+  char text[32];
+  std::snprintf(text, sizeof text, " %g kPa", pressure_pa / 1e3);
+  return text;
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+SurrogateRecipe::SurrogateRecipe() {
+  training.epochs = 300;
+  training.batch_size = 64;
+}
+
+void SurrogateRecipe::Validate(const std::string& p) const {
+  Require(steps >= 2 && steps <= 100000, p + "steps", "must lie in [2, 100000]");
+  Require(walks >= 0 && walks <= 10000, p + "walks", "must lie in [0, 10000]");
+  Require(pressures_pa.size() >= 2 && pressures_pa.size() <= 64, p + "pressures_pa",
+          "must hold 2 to 64 pressures");
+  for (double pressure : pressures_pa) {
+    Require(std::isfinite(pressure) && pressure > 0 && pressure <= 1e9, p + "pressures_pa",
+            "each must be a positive pressure up to 1 GPa, Pa");
+  }
+  Require(std::is_sorted(pressures_pa.begin(), pressures_pa.end()), p + "pressures_pa",
+          "must be in increasing order");
+  Require(std::isfinite(max_walk_strain) && max_walk_strain > 0 && max_walk_strain <= 0.2,
+          p + "max_walk_strain", "must lie in (0, 0.2]");
+  architecture.Validate(p + "architecture.");
+  Require(members >= 3 && members <= 64, p + "members", "must lie in [3, 64]");
+  training.Validate(p + "training.");
+  Require(threads >= 1 && threads <= 1024, p + "threads", "must lie in [1, 1024]");
+}
+
+std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe) {
+  using ann::LabPath;
+  const int n = recipe.steps;
+  std::vector<NamedLabPath> paths;
+  for (double p : recipe.pressures_pa) {
+    paths.push_back({"triaxial" + Kpa(p), Spec(LabPath::kTriaxial, p, 0.05, n)});
+    paths.push_back({"simple-shear" + Kpa(p), Spec(LabPath::kSimpleShear, p, 0.1, n)});
+  }
+  const double second = recipe.pressures_pa[1], last = recipe.pressures_pa.back();
+  for (double p : {second, last}) {
+    paths.push_back({"unload-reload" + Kpa(p), Spec(LabPath::kUnloadReload, p, 0.04, n)});
+    paths.push_back({"isotropic" + Kpa(p), Spec(LabPath::kIsotropic, p, 0.01, n)});
+  }
+  for (int k = 1; k <= recipe.walks; ++k) {
+    const double p = recipe.pressures_pa[static_cast<std::size_t>(k) % recipe.pressures_pa.size()];
+    paths.push_back({"random-walk" + Kpa(p) + " seed " + std::to_string(k),
+                     Spec(LabPath::kRandomWalk, p, recipe.max_walk_strain, n,
+                          static_cast<std::uint64_t>(k))});
+  }
+  return paths;
+}
+
+std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe) {
+  using ann::LabPath;
+  const int n = recipe.steps;
+  const std::vector<double>& p = recipe.pressures_pa;
+  // Between training pressures (geometric means of neighbours), never on one.
+  const auto between = [&](std::size_t k) { return std::sqrt(p[k] * p[k + 1]); };
+  const std::size_t last = p.size() - 2;
+  const double triaxial = between(last / 2), shear = between(last), reload = between(0);
+  return {{"triaxial" + Kpa(triaxial), Spec(LabPath::kTriaxial, triaxial, 0.05, n)},
+          {"simple-shear" + Kpa(shear), Spec(LabPath::kSimpleShear, shear, 0.1, n)},
+          {"unload-reload" + Kpa(reload), Spec(LabPath::kUnloadReload, reload, 0.04, n)},
+          {"random-walk" + Kpa(triaxial) + " seed 1001",
+           Spec(LabPath::kRandomWalk, triaxial, recipe.max_walk_strain, n, 1001)}};
+}
+
+std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& model,
+                                            const std::vector<NamedLabPath>& paths, int threads,
+                                            const std::function<void(int done)>& progress) {
+  std::vector<ann::StrainHistory> histories(paths.size());
+  ann::DriverOptions options;
+  options.relative_tolerance = 0.02;  // a packing's stress is a sum over contacts
+  int done = 0;
+#pragma omp parallel for schedule(dynamic) num_threads(threads)
+  for (int k = 0; k < static_cast<int>(paths.size()); ++k) {
+    histories[k] = ann::RunLabPath(model, paths[k].spec, options);
+#pragma omp critical
+    {
+      ++done;
+      if (progress) progress(done);
+    }
+  }
+  return histories;
+}
+
+RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
+                              const ComputeContext& context) {
+  std::shared_ptr<const ann::PathRecorder> recorder;
+  const PointStandInFactory record = [&](std::shared_ptr<const dem::rve::RveMaterial> rve) {
+    recorder = std::make_shared<const ann::PathRecorder>(rve);
+    PointStandIn stand_in;
+    stand_in.model = recorder;  // its states are the RVE's bytes: no translation
+    return stand_in;
+  };
+  ComputeContext alone = context;
+  alone.communicator = MPI_COMM_NULL;
+  RecordedRigRun recorded;
+  recorded.run = fe_de.RunWithStandIn(request, record, alone);
+  if (recorder) recorded.paths = recorder->Histories();
+  return recorded;
+}
+
+std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories) {
+  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a, 64 bit
+  for (const ann::StrainHistory& history : histories) {
+    for (unsigned char byte : ann::SerializeHistory(history)) {
+      hash = (hash ^ byte) * 1099511628211ULL;
+    }
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
+  return hex;
+}
+
+std::vector<ann::StrainHistory> EvenlySpread(const std::vector<ann::StrainHistory>& paths,
+                                             int count, int offset) {
+  Require(count >= 0, "count", "must be >= 0");
+  std::vector<ann::StrainHistory> chosen;
+  if (paths.empty() || count == 0) return chosen;
+  const double stride = static_cast<double>(paths.size()) / count;
+  for (int k = 0; k < count; ++k) {
+    const auto index = static_cast<std::size_t>(offset + k * stride) % paths.size();
+    chosen.push_back(paths[index]);
+  }
+  return chosen;
+}
+
+TrainedSurrogate TrainSurrogateOnRve(
+    const SoilParameters& soil, const FeDeOptions& fe_de, const SurrogateRecipe& recipe,
+    const std::function<void(const std::string& stage, double fraction)>& stage) {
+  recipe.Validate("recipe.");
+  const auto rve = dem::rve::SharedRveMaterial(
+      dem::rve::RveMaterialParamsFromSoil(soil, fe_de.numerics, "soil.parameters"));
+  const std::vector<NamedLabPath> training_paths = TrainingPaths(recipe);
+  const std::vector<NamedLabPath> held_out_paths = HeldOutPaths(recipe);
+  const double all_paths = static_cast<double>(training_paths.size() + held_out_paths.size());
+
+  TrainedSurrogate trained;
+  const auto start = std::chrono::steady_clock::now();
+  trained.training = RunLabPaths(*rve, training_paths, recipe.threads, [&](int done) {
+    if (stage) stage("paths", done / all_paths);
+  });
+  trained.held_out = RunLabPaths(*rve, held_out_paths, recipe.threads, [&](int done) {
+    if (stage) stage("paths", (training_paths.size() + done) / all_paths);
+  });
+  trained.generation_seconds = Seconds(start);
+  trained.training.insert(trained.training.end(), recipe.rig_training.begin(),
+                          recipe.rig_training.end());
+  std::vector<std::string> held_out_names;
+  for (const NamedLabPath& path : held_out_paths) held_out_names.push_back(path.name);
+  for (std::size_t k = 0; k < recipe.rig_held_out.size(); ++k) {
+    trained.held_out.push_back(recipe.rig_held_out[k]);
+    held_out_names.push_back("rig point " + std::to_string(k + 1));
+  }
+
+  for (const ann::StrainHistory& history : trained.training) {
+    trained.samples += static_cast<std::int64_t>(history.steps());
+  }
+  trained.data_hash = HistoriesHash(trained.training);
+
+  if (stage) stage("training", 0);
+  const auto train_start = std::chrono::steady_clock::now();
+  trained.ensemble = ann::SurrogateEnsemble::Train(trained.training, recipe.architecture,
+                                                   recipe.training, recipe.members);
+  trained.training_seconds = Seconds(train_start);
+  for (std::size_t k = 0; k < trained.held_out.size(); ++k) {
+    const double error = ann::ReplayError(trained.ensemble, trained.held_out[k]);
+    trained.held_out_errors.push_back({held_out_names[k], error});
+    trained.worst_held_out_error = std::max(trained.worst_held_out_error, error);
+  }
+  if (stage) stage("training", 1);
+  return trained;
+}
+
+}  // namespace gonogo::tiers

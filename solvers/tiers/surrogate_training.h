@@ -1,0 +1,98 @@
+// Training a surrogate ensemble (solvers/ann) on a soil's own DE RVE, the recipe the fe-ann tier's
+// models are made with: laboratory paths (solvers/ann/lab_paths.h) on the RVE of a dem-hertz-mindlin
+// soil at the RVE numerics of an fe-de configuration, a training set and a held-out set, an
+// ensemble trained on the first and measured on the second.
+//
+// Training set: drained triaxials and simple shears at each of `pressures_pa`, unload-reload and
+// isotropic paths at the second and last of them, and `walks` seeded random walks at pressures
+// cycling through them (within +-max_walk_strain). Held-out set: a triaxial, a simple shear and an
+// unload-reload at pressures between the training ones, and a walk of another seed.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/lab_paths.h"
+#include "solvers/ann/surrogate_ensemble.h"
+#include "solvers/common/soil_model.h"
+#include "solvers/tiers/fe_de_tier.h"
+
+namespace gonogo::tiers {
+
+struct NamedLabPath {
+  std::string name;  // "triaxial 15 kPa"
+  ann::LabPathSpec spec;
+};
+
+struct SurrogateRecipe {
+  int steps = 50;  // per path, after settling
+  int walks = 16;
+  // Confining pressures of the training paths, Pa: they span the stresses of an fe-de bin under a
+  // wheel (its surface layer starts at FeDeOptions::min_initial_pressure_pa, 2 kPa).
+  std::vector<double> pressures_pa = {2.5e3, 5e3, 10e3, 20e3, 40e3, 80e3};
+  double max_walk_strain = 0.01;
+  ann::MlpArchitecture architecture;
+  int members = 3;
+  ann::TrainingOptions training;  // epochs 300, batches of 64 unless set
+  int threads = 1;                // OpenMP threads running the paths
+  // Paths recorded at the points of an fe-de rig run (RecordRigPaths; seed 000's step 2), added to
+  // the training set and to the held-out set ("rig point k").
+  std::vector<ann::StrainHistory> rig_training;
+  std::vector<ann::StrainHistory> rig_held_out;
+  SurrogateRecipe();
+  void Validate(const std::string& field_prefix) const;
+};
+
+std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe);
+std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe);
+
+// Runs `paths` on `model` on `threads` OpenMP threads; `progress` (if set) is called with the
+// number of paths done after each.
+std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& model,
+                                            const std::vector<NamedLabPath>& paths, int threads,
+                                            const std::function<void(int done)>& progress = {});
+
+struct HeldOutResult {
+  std::string path;
+  double replay_error = 0;  // ReplayError: mean |sigma error| / mean |sigma|
+};
+
+struct TrainedSurrogate {
+  ann::SurrogateEnsemble ensemble;
+  std::vector<ann::StrainHistory> training;
+  std::vector<ann::StrainHistory> held_out;
+  std::vector<HeldOutResult> held_out_errors;
+  double worst_held_out_error = 0;
+  std::int64_t samples = 0;      // training steps
+  double generation_seconds = 0;  // running the paths
+  double training_seconds = 0;
+  // FNV-1a of the training histories' blobs (strain_history.h), hex: what data made the model.
+  std::string data_hash;
+};
+
+// The paths the points of an fe-de rig run take (seed 000's step 2): `fe_de`'s run of `request`,
+// alone, every RVE recorded (solvers/ann/path_recorder.h). The run is the fe-de run: its curve is
+// the tier's, bit for bit.
+struct RecordedRigRun {
+  FeDeRunReport run;
+  std::vector<ann::StrainHistory> paths;  // one per point of the wheel's bin
+};
+RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
+                              const ComputeContext& context = {});
+
+// FNV-1a (64 bit, hex) of the histories' blobs (strain_history.h): which data made a model.
+std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories);
+
+// `count` of `paths`, evenly spread over them from index `offset` (every size / count-th).
+std::vector<ann::StrainHistory> EvenlySpread(const std::vector<ann::StrainHistory>& paths,
+                                             int count, int offset = 0);
+
+// The recipe on `soil`'s RVE at the RVE numerics of `fe_de`. `stage` (if set) hears "paths",
+// "training" and each done fraction.
+TrainedSurrogate TrainSurrogateOnRve(
+    const SoilParameters& soil, const FeDeOptions& fe_de, const SurrogateRecipe& recipe,
+    const std::function<void(const std::string& stage, double fraction)>& stage = {});
+
+}  // namespace gonogo::tiers

@@ -1,0 +1,125 @@
+// The fe-ann tier through the whole service: `mpirun -np 2 gonogo-server --fe-de-preset tiny`
+// (rank 0 serving, rank 1 computing), driven by the `gonogo` command line. Before a model exists a
+// curve or a map on fe-ann is refused with FAILED_PRECONDITION naming the command that trains one;
+// `gonogo-ann --register` trains one on the soil's RVE into the server's data directory;
+// `gonogo models` lists it; the curve is then computed on the worker rank with it (the model's id
+// crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; a model of
+// another name, or a model given to another tier, is refused by field.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+
+#include "server_process.h"
+
+namespace gonogo::testing {
+namespace {
+
+const char kWheel[] =
+    "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+    "--section-height 0.1 --wheel-load 1000 --slip-step 0.25";
+
+// gonogo-ann, trained small, registering into `data_dir`; its output and exit code.
+CliRun TrainAndRegister(const fs::path& data_dir) {
+  const fs::path out = data_dir.parent_path() / "gonogo-ann.out";
+  const std::string command =
+      "OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann --soil " +
+      "seed000_sand_rve100 --preset tiny --steps 20 --walks 4 --architecture 16x16 --epochs 60 " +
+      "--threads 2 --register " + data_dir.string() + " > " + out.string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  return {WEXITSTATUS(status), ReadFile(out)};
+}
+
+TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
+  ScratchDir dir("fe-ann-service");
+  const fs::path data = dir.path() / "data";
+  fs::create_directories(data);
+  ServerProcess server(data, {"--fe-de-preset", "tiny"}, 2);
+
+  const CliRun tiers = Gonogo(server.endpoint(), "tiers");
+  ASSERT_EQ(tiers.exit_code, 0) << tiers.out;
+  EXPECT_NE(tiers.out.find("fe-ann (fe-ann-1-tiny)"), std::string::npos) << tiers.out;
+  const CliRun none = Gonogo(server.endpoint(), "models");
+  ASSERT_EQ(none.exit_code, 0) << none.out;
+  EXPECT_NE(none.out.find("no surrogate models"), std::string::npos) << none.out;
+
+  const CliRun refused = Gonogo(server.endpoint(), kWheel);
+  EXPECT_EQ(refused.exit_code, 3) << refused.out;
+  EXPECT_NE(refused.out.find("FAILED_PRECONDITION"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("surrogate_model"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("gonogo-ann --soil NAME --preset PRESET --register"),
+            std::string::npos)
+      << refused.out;
+
+  const CliRun trained = TrainAndRegister(data);
+  ASSERT_EQ(trained.exit_code, 0) << trained.out;
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(trained.out, match,
+                                std::regex("registered model (seed000_sand_rve100-[^ ]+)")))
+      << trained.out;
+  const std::string id = match[1];
+
+  const CliRun listed = Gonogo(server.endpoint(), "models --soil seed000_sand_rve100");
+  ASSERT_EQ(listed.exit_code, 0) << listed.out;
+  EXPECT_NE(listed.out.find(id), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("mlp-16x16-tanh-anchored, 3 members"), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("RVEs of the tiny fe-de configuration"), std::string::npos)
+      << listed.out;
+
+  const CliRun first = Gonogo(server.endpoint(), std::string(kWheel) + " --csv");
+  ASSERT_EQ(first.exit_code, 0) << first.out;
+  EXPECT_NE(first.out.find(";model=" + id + "\n"), std::string::npos) << "in the cache key: "
+                                                                       << first.out;
+  const CliRun again = Gonogo(server.endpoint(), std::string(kWheel) + " --model " + id);
+  ASSERT_EQ(again.exit_code, 0) << again.out;
+  EXPECT_NE(again.out.find("surrogate model " + id + ", from the cache by rank 1"),
+            std::string::npos)
+      << "computed on the worker rank: " << again.out;
+
+  const CliRun unknown = Gonogo(server.endpoint(), std::string(kWheel) + " --model no-such");
+  EXPECT_EQ(unknown.exit_code, 3) << unknown.out;
+  EXPECT_NE(unknown.out.find("INVALID_ARGUMENT"), std::string::npos) << unknown.out;
+  EXPECT_NE(unknown.out.find("surrogate_model: no registered model 'no-such'"), std::string::npos)
+      << unknown.out;
+  const CliRun other_tier =
+      Gonogo(server.endpoint(),
+             "curve --tier bekker --soil lll_dry_sand --wheel-diameter 0.5 --wheel-width 0.2 "
+             "--section-height 0.1 --wheel-load 1000 --model " + id);
+  EXPECT_EQ(other_tier.exit_code, 3) << other_tier.out;
+  EXPECT_NE(other_tier.out.find("the bekker tier takes no surrogate model"), std::string::npos)
+      << other_tier.out;
+
+  // A map on fe-ann: every soil class on the DE soil, a wheel pair carrying the curve's 1000 N on
+  // the same tyre, so its one curve is the cached one.
+  ASSERT_TRUE(MakeSampleTerrain(dir.path() / "terrain", 8));
+  const fs::path terrain = dir.path() / "terrain";
+  std::ofstream(terrain / "de_soils.json") << R"({"classes": [
+    {"code": 1, "name": "sand", "remolding_index": 0.9, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 2, "name": "silt loam", "remolding_index": 0.75, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 3, "name": "clay", "remolding_index": 0.55, "bekker_soil": "seed000_sand_rve100"}]})";
+  std::ofstream(terrain / "small_wheels.json") << R"({"name": "rig wheel pair",
+    "mass_kg": 203.9432, "axles": [{"load_fraction": 1.0, "wheels": 2, "driven": true,
+      "tyre": {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}}],
+    "drive_power_w": 5000, "max_speed_kmh": 20, "driveline_efficiency": 0.85,
+    "ground_clearance_m": 0.2})";
+  const std::string map_args =
+      "map --cone-index " + (terrain / "cone_index.tif").string() + " --elevation " +
+      (terrain / "elevation.tif").string() + " --soil-class " +
+      (terrain / "soil_class.tif").string() + " --soil-table " +
+      (terrain / "de_soils.json").string() + " --vehicle " +
+      (terrain / "small_wheels.json").string() + " --tier fe-ann --slip-step 0.25 --out ";
+  const std::string out = (dir.path() / "map").string();
+  const CliRun map = Gonogo(server.endpoint(), map_args + out);
+  ASSERT_EQ(map.exit_code, 0) << map.out;
+  EXPECT_TRUE(fs::exists(fs::path(out) / "gonogo.tif"));
+  EXPECT_NE(map.out.find("tasks 1/1  cache hits 1"), std::string::npos) << map.out;
+  const CliRun bad_map =
+      Gonogo(server.endpoint(), map_args + (dir.path() / "map2").string() + " --model no-such");
+  EXPECT_EQ(bad_map.exit_code, 3) << bad_map.out;
+  EXPECT_NE(bad_map.out.find("surrogate_model"), std::string::npos) << bad_map.out;
+  EXPECT_EQ(server.Terminate(), 0);
+}
+
+}  // namespace
+}  // namespace gonogo::testing

@@ -1,0 +1,248 @@
+// The fe-ann tier on the fe-de tier's test configuration: a surrogate trained on the soil's own
+// RVE by the recipe (surrogate_training.h), its curve against the fe-de curve of the same rig and
+// mesh, and the fallback: with every input flagged, every point is answered by its RVE, and the
+// curve is the fe-de curve bit for bit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+
+#include "solvers/common/errors.h"
+#include "solvers/tiers/empirical_tier.h"
+#include "solvers/tiers/fe_ann_tier.h"
+#include "solvers/tiers/soil_catalogue.h"
+#include "solvers/tiers/surrogate_training.h"
+#include "tests/solvers/tiers/fe_de_test_configuration.h"
+
+namespace gonogo::tiers {
+namespace {
+
+constexpr char kSoil[] = "seed000_sand_rve100";
+
+TractionRequest Request() {
+  TractionRequest request;
+  request.soil.soil_name = kSoil;
+  request.tyre.diameter_m = 0.5;
+  request.tyre.width_m = 0.2;
+  request.tyre.section_height_m = 0.1;
+  request.wheel_load_n = 1000;
+  request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+  return request;
+}
+
+std::string SoilText() {
+  return CanonicalText(BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters);
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+bool SameBits(const TractionCurve& a, const TractionCurve& b) {
+  if (a.points.size() != b.points.size() || a.immobile_reason != b.immobile_reason) return false;
+  for (std::size_t k = 0; k < a.points.size(); ++k) {
+    if (std::memcmp(&a.points[k], &b.points[k], sizeof(TractionPoint)) != 0) return false;
+  }
+  return true;
+}
+
+// One model and one fe-de curve for the whole suite.
+class FeAnnTierTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    char path[] = "/tmp/gonogo_fe_ann_XXXXXX";
+    ASSERT_NE(mkdtemp(path), nullptr);
+    directory_ = new std::string(path);
+    SurrogateRecipe recipe;
+    recipe.steps = 40;
+    recipe.walks = 12;
+    recipe.training.epochs = 200;
+    recipe.threads = 2;
+    const SoilParameters soil =
+        BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters;
+    const TrainedSurrogate trained = TrainSurrogateOnRve(soil, TinyFeDeOptions(), recipe);
+    std::cout << "  model: " << trained.samples << " samples, paths " << trained.generation_seconds
+              << " s, training " << trained.training_seconds << " s; held-out errors:";
+    for (const HeldOutResult& result : trained.held_out_errors) {
+      std::cout << " " << result.path << " " << 100 * result.replay_error << " %;";
+    }
+    std::cout << "\n";
+    trained.ensemble.Save(*directory_ + "/model");
+    SurrogateModelRecord record;
+    record.id = "test-model";
+    record.directory = *directory_ + "/model";
+    record.soil_parameters = SoilText();
+    record.fe_de_preset = "tiny";
+    models_ = new std::shared_ptr<const SurrogateModelSource>(
+        std::make_shared<ListedSurrogateModels>(std::vector<SurrogateModelRecord>{record}));
+
+    const auto start = std::chrono::steady_clock::now();
+    fe_de_ = new FeDeRunReport(FeDeTier(TinyFeDeOptions()).Run(Request(), {}));
+    fe_de_seconds_ = Seconds(start);
+    std::cout << "  fe-de curve: " << fe_de_seconds_ << " s, " << fe_de_->elements
+              << " elements, " << fe_de_->fe_steps << " FE steps\n";
+  }
+  static void TearDownTestSuite() {
+    std::filesystem::remove_all(*directory_);
+    delete directory_;
+    delete models_;
+    delete fe_de_;
+  }
+  static FeAnnOptions Options() {
+    FeAnnOptions options;
+    options.fe_de = TinyFeDeOptions();
+    return options;
+  }
+
+  static std::string* directory_;
+  static std::shared_ptr<const SurrogateModelSource>* models_;
+  static FeDeRunReport* fe_de_;
+  static double fe_de_seconds_;
+};
+
+std::string* FeAnnTierTest::directory_ = nullptr;
+std::shared_ptr<const SurrogateModelSource>* FeAnnTierTest::models_ = nullptr;
+FeDeRunReport* FeAnnTierTest::fe_de_ = nullptr;
+double FeAnnTierTest::fe_de_seconds_ = 0;
+
+TEST_F(FeAnnTierTest, ChoosesTheSoilsModelAndRefusesWhatItCannotAnswer) {
+  const FeAnnTier tier(Options(), *models_);
+  TractionRequest request = Request();
+  tier.ResolveChoices(request, "");
+  EXPECT_EQ(request.surrogate_model, "test-model");
+
+  request.surrogate_model = "no-such-model";
+  try {
+    tier.ResolveChoices(request, "curve.");
+    ADD_FAILURE() << "an unknown model was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "curve.surrogate_model");
+    EXPECT_NE(std::string(e.what()).find("gonogo models"), std::string::npos) << e.what();
+  }
+
+  // Another configuration's RVE numerics: no model, and the error says how to train one.
+  FeAnnOptions other = Options();
+  other.fe_de = FeDeOptions::Preset("default");
+  const FeAnnTier default_tier(other, *models_);
+  request.surrogate_model.clear();
+  try {
+    default_tier.ResolveChoices(request, "");
+    ADD_FAILURE() << "a soil with no model was accepted";
+  } catch (const PreconditionError& e) {
+    EXPECT_EQ(e.field(), "surrogate_model");
+    EXPECT_NE(std::string(e.what()).find("gonogo-ann --soil NAME --preset PRESET --register"),
+              std::string::npos)
+        << e.what();
+  }
+  request.surrogate_model = "test-model";
+  EXPECT_THROW(default_tier.ResolveChoices(request, ""), InputError);
+
+  // A tier without models refuses one by name.
+  TractionRequest empirical = Request();
+  empirical.surrogate_model = "test-model";
+  try {
+    EmpiricalTier().ResolveChoices(empirical, "");
+    ADD_FAILURE() << "the empirical tier took a surrogate model";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "surrogate_model");
+  }
+  empirical.surrogate_model = "bad id!";
+  EXPECT_THROW(empirical.Validate(), InputError);
+}
+
+// Thresholds no input can meet: every point is flagged at its first increment and answered from
+// then on by the RVE its depth starts with, which is exactly what the fe-de tier computes.
+TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
+  FeAnnOptions options = Options();
+  options.distance_threshold = 1e-12;
+  options.spread_threshold = 1e-12;
+  const FeAnnTier tier(options, *models_);
+  const AnnRunReport report = tier.Run(Request(), {});
+  ASSERT_EQ(report.curve.points.size(), 5u) << report.curve.immobile_reason;
+  EXPECT_GE(report.fallbacks, report.elements);
+  EXPECT_LE(report.fallbacks, report.elements + 4);
+  EXPECT_TRUE(std::all_of(report.fallback_steps.begin(), report.fallback_steps.end(),
+                          [](std::int64_t step) { return step == 0; }));
+  EXPECT_TRUE(SameBits(report.curve, fe_de_->curve)) << "the RVEs' curve differs from fe-de's";
+  EXPECT_EQ(report.curve.tier, "fe-ann");
+}
+
+// The network answers every point of every FE step (nothing leaves its envelope) at a fraction of
+// the RVEs' cost, and its curve is compared with fe-de's. The target, 5 % of W and of rW,
+// is not reached by a model trained on laboratory paths alone (solvers/ann/README.md: measured 9.1
+// and 11.6 %); the bounds below hold what is reached (training is seeded and single-threaded, the
+// paths deterministic), so that a change that loses accuracy fails here.
+TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
+  const FeAnnTier tier(Options(), *models_);
+  const auto start = std::chrono::steady_clock::now();
+  const AnnRunReport report = tier.Run(Request(), {});
+  const double seconds = Seconds(start);
+  ASSERT_EQ(report.curve.points.size(), fe_de_->curve.points.size())
+      << report.curve.immobile_reason;
+  EXPECT_EQ(report.model_id, "test-model");
+  std::cout << "  fe-ann curve: " << seconds << " s (fe-de " << fe_de_seconds_ << " s, "
+            << fe_de_seconds_ / seconds << "x); network " << report.network_seconds << " s for "
+            << report.network_point_updates << " point updates, fallbacks "
+            << report.fallbacks << ", " << report.fallback_seconds
+            << " s, model load " << report.model_load_seconds << " s\n";
+  const double load_n = Request().wheel_load_n;
+  const double radius_m = 0.5 * Request().tyre.diameter_m;
+  double worst_pull = 0, worst_torque = 0, worst_sinkage = 0;
+  for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
+    const TractionPoint& ann = report.curve.points[k];
+    const TractionPoint& de = fe_de_->curve.points[k];
+    std::cout << "  s " << ann.slip << ": D " << ann.drawbar_pull_n << " (fe-de "
+              << de.drawbar_pull_n << ") N, T " << ann.torque_nm << " (" << de.torque_nm
+              << ") N m, z " << 1e3 * ann.sinkage_m << " (" << 1e3 * de.sinkage_m << ") mm\n";
+    worst_pull = std::max(worst_pull, std::abs(ann.drawbar_pull_n - de.drawbar_pull_n) / load_n);
+    worst_torque =
+        std::max(worst_torque, std::abs(ann.torque_nm - de.torque_nm) / (radius_m * load_n));
+    worst_sinkage = std::max(worst_sinkage, std::abs(ann.sinkage_m - de.sinkage_m) / radius_m);
+  }
+  std::cout << "  worst: D " << 100 * worst_pull << " % of W, T " << 100 * worst_torque
+            << " % of rW, z " << 100 * worst_sinkage << " % of r\n";
+  EXPECT_EQ(report.fallbacks, 0);
+  // Every point at every FE step (and the bin's start, which asks a point or two more).
+  const std::int64_t point_steps = static_cast<std::int64_t>(report.elements) * report.fe_steps;
+  EXPECT_GE(report.network_point_updates, point_steps);
+  EXPECT_LE(report.network_point_updates, point_steps + 4);
+  EXPECT_GT(fe_de_seconds_ / seconds, 4.0) << "the network is not cheaper than the RVEs";
+  EXPECT_LT(worst_pull, 0.15);
+  EXPECT_LT(worst_torque, 0.15);
+  EXPECT_LT(worst_sinkage, 0.05);
+}
+
+// Seed 000's step 2: the paths the points of an fe-de rig run take, recorded without changing
+// the run: the recorded run's curve is the fe-de curve bit for bit, and every point of the bin has
+// a path of every FE step, starting at its geostatic stress.
+TEST_F(FeAnnTierTest, RecordsTheRigRunsPointPathsWithoutChangingItsCurve) {
+  const RecordedRigRun recorded = RecordRigPaths(FeDeTier(TinyFeDeOptions()), Request());
+  EXPECT_TRUE(SameBits(recorded.run.curve, fe_de_->curve));
+  ASSERT_EQ(recorded.paths.size(), static_cast<std::size_t>(recorded.run.elements));
+  double deepest_start_pa = 0, largest_stress_pa = 0;
+  for (const ann::StrainHistory& path : recorded.paths) {
+    EXPECT_GE(path.steps(), static_cast<std::size_t>(recorded.run.fe_steps));
+    ASSERT_EQ(path.stresses_pa.size(), path.steps());
+    deepest_start_pa = std::max(deepest_start_pa, -path.initial_stress_pa.trace() / 3);
+    for (const ann::Vector6& stress : path.stresses_pa) {
+      ASSERT_TRUE(stress.allFinite());
+      largest_stress_pa = std::max(largest_stress_pa, stress.cwiseAbs().maxCoeff());
+    }
+  }
+  std::cout << "  " << recorded.paths.size() << " paths of " << recorded.paths.front().steps()
+            << " steps; geostatic mean stress up to " << deepest_start_pa / 1e3
+            << " kPa, stresses up to " << largest_stress_pa / 1e3 << " kPa\n";
+  EXPECT_GE(deepest_start_pa, 2e3);  // the bin's floor, at least
+  EXPECT_GT(largest_stress_pa, 2 * deepest_start_pa) << "the wheel loads the points it passes";
+  const std::vector<ann::StrainHistory> spread = EvenlySpread(recorded.paths, 4, 1);
+  ASSERT_EQ(spread.size(), 4u);
+  EXPECT_EQ(spread[1].stresses_pa.back(), recorded.paths[1 + 32].stresses_pa.back());
+}
+
+}  // namespace
+}  // namespace gonogo::tiers

@@ -1,0 +1,135 @@
+// The fe-ann tier's model registry (solvers/tiers/surrogate_registry.h) on a real directory: models
+// registered with their provenance, found, chosen by their held-out error, listed; ids refused
+// when malformed or taken; what a crash mid-registration leaves is neither listed nor kept.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "solvers/common/errors.h"
+#include "solvers/tiers/surrogate_registry.h"
+#include "tests/solvers/ann/drucker_prager_paths.h"
+
+namespace gonogo::tiers {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A small ensemble (seconds to train): what it answers does not matter here, only that it is one.
+const ann::SurrogateEnsemble& Ensemble() {
+  static const ann::SurrogateEnsemble* ensemble = [] {
+    ann::MlpArchitecture architecture;
+    architecture.hidden_widths = {8};
+    ann::TrainingOptions options;
+    options.epochs = 3;
+    return new ann::SurrogateEnsemble(ann::SurrogateEnsemble::Train(
+        {ann::testing::Path(ann::LabPath::kTriaxial, 30e3, 0.02)}, architecture, options));
+  }();
+  return *ensemble;
+}
+
+RegisteredSurrogate Record(const std::string& id, const std::string& soil, double worst_error,
+                           std::int64_t created_unix_ms) {
+  RegisteredSurrogate r;
+  r.id = id;
+  r.soil_name = soil;
+  r.soil_parameters = "model=dem-hertz-mindlin;soil=" + soil;
+  r.fe_de_preset = "tiny";
+  r.architecture = "mlp-8-tanh-anchored";
+  r.members = 3;
+  r.data_hash = "0123456789abcdef";
+  r.samples = 60;
+  r.distance_threshold = 12.5;
+  r.spread_threshold = 0.04;
+  r.held_out = {{"triaxial 14.1 kPa", worst_error / 2}, {"rig point 1", worst_error}};
+  r.worst_held_out_error = worst_error;
+  r.training_seconds = 1.5;
+  r.code_version = "test";
+  r.created_unix_ms = created_unix_ms;
+  return r;
+}
+
+class SurrogateRegistryTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("gonogo_registry_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  fs::path root_;
+};
+
+TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
+  const SurrogateRegistry registry(root_.string());
+  EXPECT_TRUE(registry.List().empty());  // no directory yet: no models, no error
+  const RegisteredSurrogate a = registry.Register(Record("sand-a", "sand", 0.05, 1000), Ensemble());
+  registry.Register(Record("sand-b", "sand", 0.03, 2000), Ensemble());
+  registry.Register(Record("sand-c", "sand", 0.03, 1500), Ensemble());
+  registry.Register(Record("clay-a", "clay", 0.01, 3000), Ensemble());
+  EXPECT_EQ(a.directory, (root_ / "sand-a").string());
+
+  const std::optional<RegisteredSurrogate> described = registry.Describe("sand-a");
+  ASSERT_TRUE(described.has_value());
+  EXPECT_EQ(described->soil_parameters, "model=dem-hertz-mindlin;soil=sand");
+  EXPECT_EQ(described->architecture, "mlp-8-tanh-anchored");
+  EXPECT_EQ(described->samples, 60);
+  EXPECT_EQ(described->distance_threshold, 12.5);
+  ASSERT_EQ(described->held_out.size(), 2u);
+  EXPECT_EQ(described->held_out[0].path, "triaxial 14.1 kPa");
+  EXPECT_EQ(described->held_out[1].replay_error, 0.05);
+  // The registered files are the ensemble.
+  const ann::SurrogateEnsemble loaded = ann::SurrogateEnsemble::Load(a.directory);
+  EXPECT_EQ(loaded.size(), Ensemble().size());
+  EXPECT_EQ(loaded.distance_threshold(), Ensemble().distance_threshold());
+
+  // The best: the smallest worst error, the newest of equals; another soil or configuration not.
+  EXPECT_EQ(registry.Best("model=dem-hertz-mindlin;soil=sand", "tiny")->id, "sand-b");
+  EXPECT_EQ(registry.Best("model=dem-hertz-mindlin;soil=clay", "tiny")->id, "clay-a");
+  EXPECT_FALSE(registry.Best("model=dem-hertz-mindlin;soil=sand", "default").has_value());
+  EXPECT_FALSE(registry.Best("model=dem-hertz-mindlin;soil=silt", "tiny").has_value());
+
+  const std::vector<RegisteredSurrogate> all = registry.List();
+  ASSERT_EQ(all.size(), 4u);
+  EXPECT_EQ(all[0].id, "clay-a");  // newest first
+  EXPECT_EQ(all[3].id, "sand-a");
+  EXPECT_EQ(registry.List("sand").size(), 3u);
+
+  EXPECT_EQ(registry.NewId("seed000 sand", "mlp-8"), "seed000-sand-mlp-8-1");
+  EXPECT_FALSE(registry.Find("no-such").has_value());
+  EXPECT_FALSE(registry.Find("../sand-a").has_value());
+}
+
+TEST_F(SurrogateRegistryTest, RefusesMalformedAndTakenIds) {
+  const SurrogateRegistry registry(root_.string());
+  registry.Register(Record("taken", "sand", 0.05, 1000), Ensemble());
+  for (const std::string& id : {std::string(""), std::string(".hidden"), std::string("a/b"),
+                                std::string("with space"), std::string(65, 'x'),
+                                std::string("taken")}) {
+    try {
+      registry.Register(Record(id, "sand", 0.05, 1000), Ensemble());
+      ADD_FAILURE() << "id '" << id << "' was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "model.id") << id;
+    }
+  }
+  EXPECT_EQ(registry.List().size(), 1u);
+}
+
+TEST_F(SurrogateRegistryTest, WhatACrashLeavesIsNeitherListedNorKept) {
+  const SurrogateRegistry registry(root_.string());
+  registry.Register(Record("whole", "sand", 0.05, 1000), Ensemble());
+  fs::create_directories(root_ / ".half.registering.99");
+  fs::create_directories(root_ / "no-record");
+  fs::create_directories(root_ / "damaged");
+  std::ofstream(root_ / "damaged" / "model.txt") << "# gonogo surrogate model 1\nid = damaged\n";
+  ASSERT_EQ(registry.List().size(), 1u);
+  EXPECT_FALSE(registry.Find("damaged").has_value());
+  EXPECT_EQ(registry.CollectAbandoned(), 1);
+  EXPECT_FALSE(fs::exists(root_ / ".half.registering.99"));
+  EXPECT_TRUE(fs::exists(root_ / "whole"));
+}
+
+}  // namespace
+}  // namespace gonogo::tiers
