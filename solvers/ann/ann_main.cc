@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -56,6 +57,8 @@ struct CommandLine {
   int rig_points = 16;
   std::vector<double> validate_loads_n;
   std::string register_data_dir;  // non-empty: register each MLP ensemble there
+  std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
+  double tune_learning_rate = 1e-3;
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
   int epochs = 300;
@@ -224,6 +227,77 @@ void Validate(const CommandLine& line, const std::string& model_directory,
   }
 }
 
+// What every ensemble of a study is trained and measured on.
+struct Study {
+  SoilParameters soil;
+  std::vector<StrainHistory> training, held_out;
+  std::vector<std::string> held_out_names;
+  std::map<double, FeDeReference> references;  // fe-de curves by load
+};
+
+// One trained ensemble's row (training figures, held-out errors, evaluation cost), then, as asked,
+// its files (--out), its registration (--register) and its fe-ann runs against fe-de
+// (--validate-load-n).
+void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemble& ensemble,
+                    const std::string& name, int epochs, const std::vector<TrainingReport>& reports,
+                    double train_s, const std::string& from_model) {
+  double final_loss = 0;
+  for (const TrainingReport& report : reports) final_loss += report.final_loss / reports.size();
+  std::printf("%s,%zu,%d,%lld,%.1f,%.3g,", name.c_str(), ensemble.size(), epochs,
+              static_cast<long long>(reports.front().samples), train_s, final_loss);
+  for (const StrainHistory& history : study.held_out) {
+    std::printf("%.2f,", 100 * ReplayError(ensemble, history));
+  }
+  const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000);
+  std::printf("%.2f\n",
+              MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
+  std::fflush(stdout);
+  if (!line.out.empty()) ensemble.Save(line.out + "/" + name);
+  if (!line.register_data_dir.empty()) {
+    const tiers::SurrogateRegistry registry(
+        (std::filesystem::path(line.register_data_dir) / "models").string());
+    tiers::RegisteredSurrogate record;
+    record.id = registry.NewId(line.soil, name);
+    record.soil_name = line.soil;
+    record.soil_parameters = CanonicalText(study.soil);
+    record.fe_de_preset = line.preset;
+    record.architecture = ensemble.member(0).architecture();
+    record.members = static_cast<int>(ensemble.size());
+    record.data_hash = tiers::HistoriesHash(study.training);
+    record.samples = reports.front().samples;
+    record.distance_threshold = ensemble.distance_threshold();
+    record.spread_threshold = ensemble.spread_threshold();
+    for (std::size_t k = 0; k < study.held_out.size(); ++k) {
+      const double error = ReplayError(ensemble, study.held_out[k]);
+      record.held_out.push_back({study.held_out_names[k], error});
+      record.worst_held_out_error = std::max(record.worst_held_out_error, error);
+    }
+    record.training_seconds = train_s;
+    record.from_model = from_model;
+    record.code_version = GONOGO_VERSION;
+    record.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                 std::chrono::system_clock::now().time_since_epoch())
+                                 .count();
+    const tiers::RegisteredSurrogate registered = registry.Register(record, ensemble);
+    std::printf("# registered model %s in %s\n", registered.id.c_str(),
+                registered.directory.c_str());
+    std::fflush(stdout);
+  }
+  if (!line.validate_loads_n.empty()) {
+    const std::string directory =
+        line.out.empty() ? (std::filesystem::temp_directory_path() /
+                            ("gonogo_ann_" + std::to_string(::getpid()) + "_" +
+                             name))
+                               .string()
+                         : line.out + "/" + name;
+    if (line.out.empty()) ensemble.Save(directory);
+    std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
+                "fallback_s,fallbacks,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+    Validate(line, directory, name, study.soil, study.references);
+    if (line.out.empty()) std::filesystem::remove_all(directory);
+  }
+}
+
 int Run(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
@@ -235,6 +309,8 @@ int Run(const CommandLine& line) {
       ParseArchitecture(text);
     }
   }
+  std::optional<SurrogateEnsemble> from;  // loaded before any path runs
+  if (!line.from_model_dir.empty()) from = SurrogateEnsemble::Load(line.from_model_dir);
   const tiers::FeDeOptions preset = tiers::FeDeOptions::Preset(line.preset);
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));
@@ -293,9 +369,27 @@ int Run(const CommandLine& line) {
     WriteHistoriesNpy(line.out + "/training.npy", training_all);
     WriteHistoriesNpy(line.out + "/held_out.npy", held_out_all);
   }
+  Study study{entry->parameters, training_all, held_out_all, held_out_names, references};
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
   for (const std::string& name : held_out_names) std::printf("%s %%,", name.c_str());
   std::printf("us_per_point_batch_1000\n");
+  if (from) {
+    // Transfer learning: the given ensemble fine-tuned on this study's data; the rows below train
+    // from scratch on the same data, for comparison.
+    const SurrogateEnsemble& base = *from;
+    const std::string base_name =
+        std::filesystem::path(line.from_model_dir).lexically_normal().filename().string();
+    TrainingOptions options;
+    options.epochs = line.epochs;
+    options.batch_size = 64;
+    options.learning_rate = line.tune_learning_rate;
+    const auto train_start = std::chrono::steady_clock::now();
+    std::vector<TrainingReport> reports;
+    const SurrogateEnsemble tuned =
+        SurrogateEnsemble::FineTune(base, study.training, options, &reports);
+    ReportEnsemble(line, study, tuned, base.member(0).architecture() + "-from-" + base_name,
+                   line.epochs, reports, Since(train_start), base_name);
+  }
   for (const std::string& text : line.architectures) {
     if (text.rfind("gru", 0) == 0) {
       RunRecurrent(line, text, training_all, held_out_all);
@@ -312,60 +406,8 @@ int Run(const CommandLine& line) {
         SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - train_start).count();
-    double final_loss = 0;
-    for (const TrainingReport& report : reports) final_loss += report.final_loss / reports.size();
-    std::printf("%s,%d,%d,%lld,%.1f,%.3g,", architecture.Describe().c_str(), line.members,
-                line.epochs, static_cast<long long>(reports.front().samples), train_s, final_loss);
-    for (const StrainHistory& history : held_out_all) {
-      std::printf("%.2f,", 100 * ReplayError(ensemble, history));
-    }
-    const std::vector<SurrogateInput> batch = TimingBatch(training_all, 1000);
-    std::printf("%.2f\n",
-                MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
-    std::fflush(stdout);
-    if (!line.out.empty()) ensemble.Save(line.out + "/" + architecture.Describe());
-    if (!line.register_data_dir.empty()) {
-      const tiers::SurrogateRegistry registry(
-          (std::filesystem::path(line.register_data_dir) / "models").string());
-      tiers::RegisteredSurrogate record;
-      record.id = registry.NewId(line.soil, architecture.Describe());
-      record.soil_name = line.soil;
-      record.soil_parameters = CanonicalText(entry->parameters);
-      record.fe_de_preset = line.preset;
-      record.architecture = architecture.Describe();
-      record.members = line.members;
-      record.data_hash = tiers::HistoriesHash(training_all);
-      record.samples = reports.front().samples;
-      record.distance_threshold = ensemble.distance_threshold();
-      record.spread_threshold = ensemble.spread_threshold();
-      for (std::size_t k = 0; k < held_out_all.size(); ++k) {
-        const double error = ReplayError(ensemble, held_out_all[k]);
-        record.held_out.push_back({held_out_names[k], error});
-        record.worst_held_out_error = std::max(record.worst_held_out_error, error);
-      }
-      record.training_seconds = train_s;
-      record.code_version = GONOGO_VERSION;
-      record.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                                   std::chrono::system_clock::now().time_since_epoch())
-                                   .count();
-      const tiers::RegisteredSurrogate registered = registry.Register(record, ensemble);
-      std::printf("# registered model %s in %s\n", registered.id.c_str(),
-                  registered.directory.c_str());
-      std::fflush(stdout);
-    }
-    if (!line.validate_loads_n.empty()) {
-      const std::string directory =
-          line.out.empty() ? (std::filesystem::temp_directory_path() /
-                              ("gonogo_ann_" + std::to_string(::getpid()) + "_" +
-                               architecture.Describe()))
-                                 .string()
-                           : line.out + "/" + architecture.Describe();
-      if (line.out.empty()) ensemble.Save(directory);
-      std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
-                  "fallback_s,fallbacks,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
-      Validate(line, directory, architecture.Describe(), entry->parameters, references);
-      if (line.out.empty()) std::filesystem::remove_all(directory);
-    }
+    ReportEnsemble(line, study, ensemble, architecture.Describe(), line.epochs, reports, train_s,
+                   "");
   }
   return 0;
 }
@@ -415,6 +457,14 @@ int main(int argc, char** argv) {
                  "register each MLP ensemble with its provenance in this gonogo-server data "
                  "directory (DATA_DIR/models), where the fe-ann tier finds it")
       ->type_name("DATA_DIR");
+  app.add_option("--from", line.from_model_dir,
+                 "transfer learning: also fine-tune this ensemble (a directory: DATA_DIR/models/ID "
+                 "or --out's) on the study's data, beside the architectures trained from scratch")
+      ->type_name("MODEL_DIR");
+  app.add_option("--tune-learning-rate", line.tune_learning_rate,
+                 "Adam's learning rate when fine-tuning")
+      ->check(CLI::Range(1e-8, 0.5))
+      ->capture_default_str();
   app.add_option("--members", line.members, "ensemble members")
       ->check(CLI::Range(3, 64))
       ->capture_default_str();

@@ -153,15 +153,8 @@ AnnMaterial::AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
   initial_stress_pa_ = options_.initial_stress_pa;
   if (fallback_ != nullptr) {
     // A fresh point starts where the real model's fresh point does.
-    const std::unique_ptr<material::MaterialState> fresh = fallback_->InitialState();
-    material::PointIncrement zero;
-    zero.committed = fresh.get();
-    const std::vector<material::PointResponse> start = fallback_->Update({zero}, false);
-    if (start.at(0).status != material::UpdateStatus::kOk) {
-      throw NumericalError("fallback model: a zero increment on its initial state failed: " +
-                           start.at(0).reason);
-    }
-    initial_stress_pa_ = start.at(0).stress_pa;
+    initial_stress_pa_ = material::StressOfState(*fallback_, *fallback_->InitialState(),
+                                                 "fallback model, its initial state");
   }
 }
 
@@ -223,15 +216,9 @@ std::unique_ptr<AnnState> AnnMaterial::StateFrom(const std::string& real_state_b
     throw InputError("material.state", "a point cannot start from a real state without its model");
   }
   const std::unique_ptr<material::MaterialState> real = fallback_->RestoreState(real_state_bytes);
-  material::PointIncrement zero;
-  zero.committed = real.get();
-  const std::vector<material::PointResponse> start = fallback_->Update({zero}, false);
-  if (start.at(0).status != material::UpdateStatus::kOk) {
-    throw NumericalError("fallback model: a zero increment on a point's starting state failed: " +
-                         start.at(0).reason);
-  }
   auto state = std::make_unique<AnnState>();
-  state->stress_pa = start.at(0).stress_pa;
+  state->stress_pa =
+      material::StressOfState(*fallback_, *real, "fallback model, a point's starting state");
   state->origin = Intern(real_state_bytes);
   return state;
 }

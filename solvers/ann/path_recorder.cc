@@ -47,18 +47,13 @@ PathRecorder::PathRecorder(std::shared_ptr<const material::ConstitutiveModel> in
 
 std::unique_ptr<material::MaterialState> PathRecorder::Wrap(
     std::unique_ptr<material::MaterialState> inner) const {
-  material::PointIncrement zero;
-  zero.committed = inner.get();
-  const std::vector<material::PointResponse> start = inner_->Update({zero}, false);
-  if (start.at(0).status != material::UpdateStatus::kOk) {
-    throw NumericalError("recorded model: a zero increment on a point's start failed: " +
-                         start.at(0).reason);
-  }
+  const Matrix3 start_pa =
+      material::StressOfState(*inner_, *inner, "recorded model, a point's start");
   auto state = std::make_unique<RecordedState>();
   state->inner = std::move(inner);
   std::lock_guard<std::mutex> lock(mutex_);
   state->point = next_point_++;
-  initial_stress_pa_[state->point] = start.at(0).stress_pa;
+  initial_stress_pa_[state->point] = start_pa;
   return state;
 }
 

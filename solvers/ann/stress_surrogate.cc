@@ -200,6 +200,28 @@ std::vector<SurrogateInput> InputsOf(const StrainHistory& history) {
 StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histories,
                                        const MlpArchitecture& architecture,
                                        const TrainingOptions& options, TrainingReport* report) {
+  return TrainFrom(histories, architecture, options, report, nullptr);
+}
+
+StressSurrogate StressSurrogate::FineTune(const StressSurrogate& base,
+                                          const std::vector<StrainHistory>& histories,
+                                          const TrainingOptions& options, TrainingReport* report) {
+  if (base.impl_->fused.weights.empty()) {
+    throw InputError("model", "the model to fine-tune from is not an MLP surrogate");
+  }
+  MlpArchitecture architecture;
+  architecture.hidden_widths.clear();
+  for (std::size_t k = 0; k + 1 < base.impl_->fused.weights.size(); ++k) {
+    architecture.hidden_widths.push_back(static_cast<int>(base.impl_->fused.weights[k].rows()));
+  }
+  architecture.anchored = base.impl_->fused.anchored;
+  return TrainFrom(histories, architecture, options, report, &base);
+}
+
+StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& histories,
+                                           const MlpArchitecture& architecture,
+                                           const TrainingOptions& options, TrainingReport* report,
+                                           const StressSurrogate* base) {
   architecture.Validate("architecture.");
   options.Validate("training.");
   const auto start = std::chrono::steady_clock::now();
@@ -225,10 +247,18 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
   if (!torch::isfinite(x).all().item<bool>() || !torch::isfinite(y).all().item<bool>()) {
     throw InputError("histories", "a step holds a value that is not finite");
   }
-  const auto [in_mean, in_scale] = Standardisation(x);
+  auto [in_mean, in_scale] = Standardisation(x);
   auto [out_mean, out_scale] = Standardisation(y);
   // Anchored, the output has no offset: d_sigma is the difference of two network answers.
   if (architecture.anchored) out_mean = torch::zeros_like(out_mean);
+  if (base != nullptr) {
+    // Fine-tuning keeps the base's standardisation, which its weights were learnt in.
+    const torch::jit::Module& module = base->impl_->module;
+    in_mean = module.attr("in_mean").toTensor().detach().clone();
+    in_scale = module.attr("in_scale").toTensor().detach().clone();
+    out_mean = module.attr("out_mean").toTensor().detach().clone();
+    out_scale = module.attr("out_scale").toTensor().detach().clone();
+  }
   const torch::Tensor xs = (x - in_mean) / in_scale;
   const torch::Tensor ys = (y - out_mean) / out_scale;
   torch::Tensor rest = x.clone();
@@ -249,6 +279,14 @@ StressSurrogate StressSurrogate::Train(const std::vector<StrainHistory>& histori
   layers.push_back(torch::nn::Linear(width, kOutputs));
   net->push_back(layers.back());
   net->to(torch::kFloat64);
+  if (base != nullptr) {  // start from the base's weights
+    torch::NoGradGuard no_grad;
+    const torch::jit::Module& module = base->impl_->module;
+    for (std::size_t k = 0; k < layers.size(); ++k) {
+      layers[k]->weight.copy_(module.attr("w" + std::to_string(k)).toTensor());
+      layers[k]->bias.copy_(module.attr("b" + std::to_string(k)).toTensor());
+    }
+  }
 
   torch::optim::Adam optimizer(net->parameters(), torch::optim::AdamOptions(options.learning_rate));
   const std::int64_t samples = xs.size(0);

@@ -75,6 +75,14 @@ class StressSurrogate {
                                const MlpArchitecture& architecture,
                                const TrainingOptions& options, TrainingReport* report = nullptr);
 
+  // Transfer learning (seed 000's future work): a surrogate of another material started from
+  // `base`'s weights and standardisation (its architecture, anchored or not), trained on
+  // `histories` with `options` (fewer epochs and a smaller learning rate than from scratch, as a
+  // rule). Throws as Train, and InputError("model", ...) for a base that is not an MLP.
+  static StressSurrogate FineTune(const StressSurrogate& base,
+                                  const std::vector<StrainHistory>& histories,
+                                  const TrainingOptions& options, TrainingReport* report = nullptr);
+
   // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point. By the
   // fused Eigen kernel (fused_mlp.h) on the module's weights.
   std::vector<Vector6> StressIncrements(const std::vector<SurrogateInput>& inputs,
@@ -95,6 +103,12 @@ class StressSurrogate {
  private:
   struct Impl;
   explicit StressSurrogate(std::unique_ptr<Impl> impl);
+  // Train and FineTune: from random (seeded) weights and the data's standardisation, or from
+  // `base`'s.
+  static StressSurrogate TrainFrom(const std::vector<StrainHistory>& histories,
+                                   const MlpArchitecture& architecture,
+                                   const TrainingOptions& options, TrainingReport* report,
+                                   const StressSurrogate* base);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -95,20 +95,42 @@ SurrogateEnsemble SurrogateEnsemble::Train(const std::vector<StrainHistory>& his
         StressSurrogate::Train(histories, architecture, member_options, &report));
     if (reports != nullptr) reports->push_back(report);
   }
+  ensemble.FitEnvelopeAndThresholds(histories);
+  return ensemble;
+}
+
+SurrogateEnsemble SurrogateEnsemble::FineTune(const SurrogateEnsemble& base,
+                                              const std::vector<StrainHistory>& histories,
+                                              const TrainingOptions& options,
+                                              std::vector<TrainingReport>* reports) {
+  if (base.members_.size() < 3) throw InputError("model", "the base ensemble has no members");
+  SurrogateEnsemble ensemble;
+  for (std::size_t k = 0; k < base.members_.size(); ++k) {
+    TrainingOptions member_options = options;
+    member_options.seed = options.seed + static_cast<std::uint64_t>(k);
+    TrainingReport report;
+    ensemble.members_.push_back(
+        StressSurrogate::FineTune(base.members_[k], histories, member_options, &report));
+    if (reports != nullptr) reports->push_back(report);
+  }
+  ensemble.FitEnvelopeAndThresholds(histories);
+  return ensemble;
+}
+
+void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory>& histories) {
   std::vector<SurrogateInput> inputs;
   for (const StrainHistory& history : histories) {
     const std::vector<SurrogateInput> steps = InputsOf(history);
     inputs.insert(inputs.end(), steps.begin(), steps.end());
   }
-  ensemble.envelope_ = FitEnvelope(inputs);
-  ensemble.distance_threshold_ = ensemble.envelope_.largest_training_distance;
-  ensemble.spread_threshold_ = 1.0;  // no flag while the training spread is measured
+  envelope_ = FitEnvelope(inputs);
+  distance_threshold_ = envelope_.largest_training_distance;
+  spread_threshold_ = 1.0;  // no flag while the training spread is measured
   double largest_spread = 0;
-  for (const EnsembleAnswer& answer : ensemble.Answer(inputs, false)) {
+  for (const EnsembleAnswer& answer : Answer(inputs, false)) {
     largest_spread = std::max(largest_spread, answer.relative_spread);
   }
-  ensemble.spread_threshold_ = std::max(3 * largest_spread, 1e-12);
-  return ensemble;
+  spread_threshold_ = std::max(3 * largest_spread, 1e-12);
 }
 
 void SurrogateEnsemble::SetThresholds(double distance_threshold, double spread_threshold) {

@@ -58,6 +58,14 @@ class SurrogateEnsemble {
                                  const TrainingOptions& options, int members = 3,
                                  std::vector<TrainingReport>* reports = nullptr);
 
+  // Transfer learning: each member of `base` fine-tuned (StressSurrogate::FineTune) on
+  // `histories`, member k with seed options.seed + k; the envelope and the default thresholds
+  // fitted on `histories` (the new material's), as Train does.
+  static SurrogateEnsemble FineTune(const SurrogateEnsemble& base,
+                                    const std::vector<StrainHistory>& histories,
+                                    const TrainingOptions& options,
+                                    std::vector<TrainingReport>* reports = nullptr);
+
   std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
                                      bool want_tangent) const;
 
@@ -76,6 +84,9 @@ class SurrogateEnsemble {
   static SurrogateEnsemble Load(const std::string& directory);
 
  private:
+  // Fits the envelope and the default thresholds on the histories' inputs.
+  void FitEnvelopeAndThresholds(const std::vector<StrainHistory>& histories);
+
   std::vector<StressSurrogate> members_;
   InputEnvelope envelope_;
   double distance_threshold_ = 0;

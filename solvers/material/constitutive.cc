@@ -33,6 +33,18 @@ std::unique_ptr<MaterialPointStore> ConstitutiveModel::MakePointStore() const {
   return std::make_unique<LocalPointStore>(*this);
 }
 
+Matrix3 StressOfState(const ConstitutiveModel& model, const MaterialState& state,
+                      const std::string& what) {
+  PointIncrement zero;  // displacement_gradient_increment is zero by default
+  zero.committed = &state;
+  const std::vector<PointResponse> responses = model.Update({zero}, /*want_tangent=*/false);
+  if (responses.size() != 1 || responses[0].status != UpdateStatus::kOk) {
+    throw NumericalError(what + ": a zero increment failed" +
+                         (responses.empty() ? std::string() : ": " + responses[0].reason));
+  }
+  return responses[0].stress_pa;
+}
+
 std::vector<PointResponse> UpdateEachPoint(
     const std::vector<PointIncrement>& increments,
     const std::function<PointResponse(const PointIncrement&)>& update_one) {

@@ -97,6 +97,11 @@ std::vector<PointResponse> UpdateEachPoint(
     const std::vector<PointIncrement>& increments,
     const std::function<PointResponse(const PointIncrement&)>& update_one);
 
+// The stress of `state` as `model` answers it: a zero increment, not committed. Throws
+// gonogo::NumericalError("<what>: ...") when the model refuses that increment.
+Matrix3 StressOfState(const ConstitutiveModel& model, const MaterialState& state,
+                      const std::string& what);
+
 // `count` doubles as raw bytes (host byte order), for Serialize().
 std::string PackDoubles(const double* values, std::size_t count);
 // The inverse, for RestoreState(): throws gonogo::InputError(field, ...) when `bytes` does not

@@ -3,12 +3,11 @@
 // curve or a map on fe-ann is refused with FAILED_PRECONDITION naming the command that trains one;
 // `gonogo-ann --register` trains one on the soil's RVE into the server's data directory;
 // `gonogo models` lists it; the curve is then computed on the worker rank with it (the model's id
-// crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; a model of
-// another name, or a model given to another tier, is refused by field.
+// crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; an unknown
+// model (for a curve or a map), or a model given to another tier, is refused by field.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <regex>
 
 #include "server_process.h"
@@ -52,6 +51,24 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
             std::string::npos)
       << refused.out;
 
+  // A map's inputs: every soil class on the DE soil, a wheel pair carrying the curve's 1000 N on
+  // the same tyre (so that, later, the map's one curve is the cached one). Without a model the map
+  // is refused at submission.
+  ASSERT_TRUE(MakeSampleTerrain(dir.path() / "terrain", 8));
+  const fs::path terrain = dir.path() / "terrain";
+  WriteDeSoilTableAndRigWheels(terrain);
+  const std::string map_args =
+      "map --cone-index " + (terrain / "cone_index.tif").string() + " --elevation " +
+      (terrain / "elevation.tif").string() + " --soil-class " +
+      (terrain / "soil_class.tif").string() + " --soil-table " +
+      (terrain / "de_soils.json").string() + " --vehicle " +
+      (terrain / "small_wheels.json").string() + " --tier fe-ann --slip-step 0.25 --out ";
+  const CliRun map_refused =
+      Gonogo(server.endpoint(), map_args + (dir.path() / "map0").string());
+  EXPECT_EQ(map_refused.exit_code, 3) << map_refused.out;
+  EXPECT_NE(map_refused.out.find("FAILED_PRECONDITION"), std::string::npos) << map_refused.out;
+  EXPECT_FALSE(fs::exists(dir.path() / "map0" / "gonogo.tif"));
+
   const CliRun trained = TrainAndRegister(data);
   ASSERT_EQ(trained.exit_code, 0) << trained.out;
   std::smatch match;
@@ -90,25 +107,6 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_NE(other_tier.out.find("the bekker tier takes no surrogate model"), std::string::npos)
       << other_tier.out;
 
-  // A map on fe-ann: every soil class on the DE soil, a wheel pair carrying the curve's 1000 N on
-  // the same tyre, so its one curve is the cached one.
-  ASSERT_TRUE(MakeSampleTerrain(dir.path() / "terrain", 8));
-  const fs::path terrain = dir.path() / "terrain";
-  std::ofstream(terrain / "de_soils.json") << R"({"classes": [
-    {"code": 1, "name": "sand", "remolding_index": 0.9, "bekker_soil": "seed000_sand_rve100"},
-    {"code": 2, "name": "silt loam", "remolding_index": 0.75, "bekker_soil": "seed000_sand_rve100"},
-    {"code": 3, "name": "clay", "remolding_index": 0.55, "bekker_soil": "seed000_sand_rve100"}]})";
-  std::ofstream(terrain / "small_wheels.json") << R"({"name": "rig wheel pair",
-    "mass_kg": 203.9432, "axles": [{"load_fraction": 1.0, "wheels": 2, "driven": true,
-      "tyre": {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}}],
-    "drive_power_w": 5000, "max_speed_kmh": 20, "driveline_efficiency": 0.85,
-    "ground_clearance_m": 0.2})";
-  const std::string map_args =
-      "map --cone-index " + (terrain / "cone_index.tif").string() + " --elevation " +
-      (terrain / "elevation.tif").string() + " --soil-class " +
-      (terrain / "soil_class.tif").string() + " --soil-table " +
-      (terrain / "de_soils.json").string() + " --vehicle " +
-      (terrain / "small_wheels.json").string() + " --tier fe-ann --slip-step 0.25 --out ";
   const std::string out = (dir.path() / "map").string();
   const CliRun map = Gonogo(server.endpoint(), map_args + out);
   ASSERT_EQ(map.exit_code, 0) << map.out;

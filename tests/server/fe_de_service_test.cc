@@ -8,7 +8,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -68,15 +67,7 @@ TEST(FeDeService, CurveJobOnARankGroupThenFromTheCacheAndCancelFreesTheGroup) {
   // curve's 1000 N on the same tyre, so the map's one fe-de curve is the one just computed.
   ASSERT_TRUE(MakeSampleTerrain(dir.path() / "terrain", 8));
   const fs::path terrain = dir.path() / "terrain";
-  std::ofstream(terrain / "de_soils.json") << R"({"classes": [
-    {"code": 1, "name": "sand", "remolding_index": 0.9, "bekker_soil": "seed000_sand_rve100"},
-    {"code": 2, "name": "silt loam", "remolding_index": 0.75, "bekker_soil": "seed000_sand_rve100"},
-    {"code": 3, "name": "clay", "remolding_index": 0.55, "bekker_soil": "seed000_sand_rve100"}]})";
-  std::ofstream(terrain / "small_wheels.json") << R"({"name": "rig wheel pair",
-    "mass_kg": 203.9432, "axles": [{"load_fraction": 1.0, "wheels": 2, "driven": true,
-      "tyre": {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}}],
-    "drive_power_w": 5000, "max_speed_kmh": 20, "driveline_efficiency": 0.85,
-    "ground_clearance_m": 0.2})";
+  WriteDeSoilTableAndRigWheels(terrain);
   const std::string out = (dir.path() / "map").string();
   const CliRun map = Gonogo(
       server.endpoint(),

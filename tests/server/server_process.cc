@@ -61,6 +61,18 @@ bool MakeSampleTerrain(const fs::path& out, int size) {
   return std::system(cmd.c_str()) == 0;
 }
 
+void WriteDeSoilTableAndRigWheels(const fs::path& terrain_dir) {
+  std::ofstream(terrain_dir / "de_soils.json") << R"({"classes": [
+    {"code": 1, "name": "sand", "remolding_index": 0.9, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 2, "name": "silt loam", "remolding_index": 0.75, "bekker_soil": "seed000_sand_rve100"},
+    {"code": 3, "name": "clay", "remolding_index": 0.55, "bekker_soil": "seed000_sand_rve100"}]})";
+  std::ofstream(terrain_dir / "small_wheels.json") << R"({"name": "rig wheel pair",
+    "mass_kg": 203.9432, "axles": [{"load_fraction": 1.0, "wheels": 2, "driven": true,
+      "tyre": {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}}],
+    "drive_power_w": 5000, "max_speed_kmh": 20, "driveline_efficiency": 0.85,
+    "ground_clearance_m": 0.2})";
+}
+
 ServerProcess::ServerProcess(const fs::path& data_dir, std::vector<std::string> extra,
                              int mpi_ranks) {
   std::vector<std::string> args;

@@ -35,6 +35,10 @@ class ScratchDir {
 
 // Runs the bundled sample-terrain script into `out` (size x size cells); returns false on failure.
 bool MakeSampleTerrain(const fs::path& out, int size);
+// Beside a sample terrain in `terrain_dir`: de_soils.json, a soil table mapping every class to the
+// DE soil seed000_sand_rve100, and small_wheels.json, a one-axle pair of 0.5 x 0.2 m wheels each
+// carrying 1,000 N (the fe-de and fe-ann tests' rig wheel), for maps on those tiers.
+void WriteDeSoilTableAndRigWheels(const fs::path& terrain_dir);
 
 // gonogo-server (optionally under mpirun) listening on 127.0.0.1:0.
 class ServerProcess {

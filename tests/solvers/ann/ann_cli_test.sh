@@ -1,6 +1,8 @@
 #!/bin/sh
 # gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of
-# the architecture, and refuses malformed architectures by name before running any path.
+# the architecture, and refuses malformed architectures by name before running any path; then
+# fine-tunes that ensemble (--from) beside a new one from scratch and registers both (--register)
+# with their provenance, the fine-tuned one naming its base.
 set -eu
 ann="$1"
 out="$2"
@@ -20,4 +22,17 @@ for bad in 8xq 64a gruq; do
   fi
   grep -q -- "--architecture: '$bad'" "$out/error.txt"
 done
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 1 \
+  --architecture 8 --epochs 2 --threads 1 --from "$out/mlp-8-tanh-anchored" \
+  --register "$out/data" > "$out/tuned.csv" 2> "$out/tuned_progress.txt"
+grep -q '^mlp-8-tanh-anchored-from-mlp-8-tanh-anchored,3,2,[0-9][0-9]*,' "$out/tuned.csv"
+grep -q '^mlp-8-tanh-anchored,3,2,[0-9][0-9]*,' "$out/tuned.csv"
+test "$(grep -c '^# registered model seed000_sand_rve100-' "$out/tuned.csv")" = 2
+grep -q '^from_model = mlp-8-tanh-anchored$' "$out"/data/models/*-from-*/model.txt
+grep -q '^fe_de_preset = ci$' "$out"/data/models/seed000_sand_rve100-mlp-8-tanh-anchored-1/model.txt
+if "$ann" --from "$out/no-such-model" > /dev/null 2> "$out/error.txt"; then
+  echo "--from a missing model was accepted" >&2
+  exit 1
+fi
+grep -q "model" "$out/error.txt"
 echo "ann_cli_test: ok"

@@ -118,6 +118,63 @@ TEST(StressSurrogate, TheFusedKernelGivesTheModulesAnswersAndNothingAtRest) {
   }
 }
 
+// Transfer learning (seed 000's future work): the surrogate of one soil fine-tuned to another
+// with a small share of the data (3 paths against the base's 35), against a surrogate trained
+// from scratch on the same 3 paths for the same epochs; both replay the other soil's held-out
+// paths.
+TEST(StressSurrogate, FineTunedFromAnotherSoilBeatsScratchOnTheSameFewPaths) {
+  material::DruckerPragerParams stiffer;
+  stiffer.young_pa = 45e6;
+  stiffer.poisson = 0.25;
+  stiffer.cohesion_pa = 3e3;
+  stiffer.friction_angle_deg = 30;
+  stiffer.dilation_angle_deg = 2;
+  const material::DruckerPrager other(stiffer);
+  const auto path = [&](LabPath kind, double pressure_pa, double max_strain, std::uint64_t seed) {
+    LabPathSpec spec;
+    spec.path = kind;
+    spec.pressure_pa = pressure_pa;
+    spec.max_strain = max_strain;
+    spec.steps = 60;
+    spec.seed = seed;
+    spec.walk_step_strain = 5e-4;
+    return RunLabPath(other, spec);
+  };
+  const std::vector<StrainHistory> few = {path(LabPath::kTriaxial, 20e3, 0.02, 1),
+                                          path(LabPath::kSimpleShear, 50e3, 0.04, 1),
+                                          path(LabPath::kRandomWalk, 40e3, 0.004, 5)};
+  const std::vector<std::pair<std::string, StrainHistory>> held_out = {
+      {"triaxial 30 kPa", path(LabPath::kTriaxial, 30e3, 0.02, 1)},
+      {"unload-reload 60 kPa", path(LabPath::kUnloadReload, 60e3, 0.02, 1)},
+      {"random walk seed 99", path(LabPath::kRandomWalk, 30e3, 0.004, 99)}};
+  TrainingOptions options;
+  options.epochs = 150;
+  options.batch_size = 64;
+  TrainingOptions tuning = options;
+  tuning.learning_rate = 1e-3;
+  TrainingReport tuned_report, scratch_report;
+  const StressSurrogate tuned = StressSurrogate::FineTune(Trained(), few, tuning, &tuned_report);
+  const StressSurrogate scratch =
+      StressSurrogate::Train(few, MlpArchitecture{}, options, &scratch_report);
+  EXPECT_EQ(tuned.architecture(), Trained().architecture());
+  double tuned_sum = 0, scratch_sum = 0;
+  for (const auto& [name, history] : held_out) {
+    const double tuned_error = ReplayError(tuned, history);
+    const double scratch_error = ReplayError(scratch, history);
+    std::cout << "  " << name << ": fine-tuned " << 100 * tuned_error << " %, from scratch "
+              << 100 * scratch_error << " %\n";
+    tuned_sum += tuned_error;
+    scratch_sum += scratch_error;
+  }
+  std::cout << "  " << tuned_report.samples << " samples; fine-tuning " << tuned_report.seconds
+            << " s, from scratch " << scratch_report.seconds << " s; base's own error on the "
+            << "other soil's triaxial " << 100 * ReplayError(Trained(), held_out[0].second)
+            << " %\n";
+  EXPECT_LT(tuned_sum, scratch_sum);
+  // Nothing to learn is refused, as for a training from scratch.
+  EXPECT_THROW(StressSurrogate::FineTune(tuned, {}, tuning), InputError);
+}
+
 TEST(StressSurrogate, SavesAsTorchScriptAndLoadsToTheSameAnswers) {
   const StressSurrogate& surrogate = Trained();
   const std::filesystem::path directory =

@@ -1,0 +1,190 @@
+// gonogo-bench-fe-ann: the fe-ann tier's figures (issue "FE-ANN tier", benchmark).
+//
+//   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
+//                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
+//
+// Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
+// the preset's numerics, then prints
+//   - training: paths' and training's seconds, samples, the histories' bytes;
+//   - the network: microseconds per point and evaluations per second of one member, batched
+//     (1 to 8,192 points), by the fused Eigen kernel and by the TorchScript module, and of the
+//     ensemble (3 members, the envelope's checks included);
+//   - a traction curve of the preset's rig (0.5 x 0.2 m wheel) by fe-de and by fe-ann: wall
+//     seconds, the fe-ann phases (network, fallbacks, model load, the rest: FE and contact), the
+//     speedup and the largest differences;
+//   - peak resident memory after each part.
+#include <CLI/CLI.hpp>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "solvers/ann/strain_history.h"
+#include "solvers/dem/rve/rve_soil.h"
+#include "solvers/tiers/fe_ann_tier.h"
+#include "solvers/tiers/soil_catalogue.h"
+#include "solvers/tiers/surrogate_training.h"
+
+namespace {
+
+using namespace gonogo;
+
+double PeakRssMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // kB on Linux
+}
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Microseconds per point of `evaluate` on a batch of `points`, repeated to about 0.3 s.
+double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& evaluate) {
+  evaluate();  // warm
+  int repeats = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (Since(start) < 0.3 || repeats < 3) {
+    evaluate();
+    ++repeats;
+  }
+  return 1e6 * Since(start) / (repeats * static_cast<double>(points));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
+  int steps = 40, walks = 12, epochs = 200, threads = 2;
+  double load_n = 1000;
+  CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
+  app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
+  app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
+  app.add_option("--steps", steps, "steps per training path")->capture_default_str();
+  app.add_option("--walks", walks, "random walks in the training set")->capture_default_str();
+  app.add_option("--epochs", epochs, "training epochs")->capture_default_str();
+  app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
+      ->capture_default_str();
+  app.add_option("--wheel-load-n", load_n, "the rig wheel's load, N")->capture_default_str();
+  app.add_option("--threads", threads, "OpenMP threads running the training paths")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const tiers::CatalogueEntry* entry =
+        tiers::BuiltinSoilCatalogue().Find(soil_name, dem::rve::kRveSoilModel);
+    if (entry == nullptr) throw InputError("--soil", "no dem-hertz-mindlin soil '" + soil_name + "'");
+    tiers::SurrogateRecipe recipe;
+    recipe.steps = steps;
+    recipe.walks = walks;
+    recipe.training.epochs = epochs;
+    recipe.threads = threads;
+    recipe.architecture.hidden_widths.clear();
+    std::stringstream widths(architecture_text);
+    for (std::string width; std::getline(widths, width, 'x');) {
+      recipe.architecture.hidden_widths.push_back(std::stoi(width));
+    }
+    const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(preset);
+    std::printf("# gonogo-bench-fe-ann: soil %s, preset %s, %s, %d epochs\n", soil_name.c_str(),
+                preset.c_str(), recipe.architecture.Describe().c_str(), epochs);
+
+    const tiers::TrainedSurrogate trained =
+        tiers::TrainSurrogateOnRve(entry->parameters, fe_de, recipe);
+    std::size_t history_bytes = 0;
+    for (const ann::StrainHistory& history : trained.training) {
+      history_bytes += ann::SerializeHistory(history).size();
+    }
+    std::printf("training: paths %.1f s on %d threads, training %.1f s (3 members, one thread), "
+                "%lld samples, histories %.1f kB; worst held-out %.1f %%; peak RSS %.0f MB\n",
+                trained.generation_seconds, threads, trained.training_seconds,
+                static_cast<long long>(trained.samples), history_bytes / 1024.0,
+                100 * trained.worst_held_out_error, PeakRssMb());
+
+    // The network, batched.
+    std::vector<ann::SurrogateInput> pool;
+    for (const ann::StrainHistory& history : trained.training) {
+      for (const ann::SurrogateInput& input : ann::InputsOf(history)) pool.push_back(input);
+    }
+    std::printf("batch,fused_us_per_point,module_us_per_point,fused_evals_per_s,"
+                "ensemble_us_per_point,ensemble_tangent_us_per_point\n");
+    const ann::StressSurrogate& member = trained.ensemble.member(0);
+    for (std::size_t batch_size : {1, 16, 128, 1024, 8192}) {
+      std::vector<ann::SurrogateInput> batch;
+      for (std::size_t k = 0; k < batch_size; ++k) batch.push_back(pool[k % pool.size()]);
+      const double fused = MicrosecondsPerPoint(batch_size, [&] { member.StressIncrements(batch); });
+      const double module =
+          MicrosecondsPerPoint(batch_size, [&] { member.StressIncrementsByModule(batch); });
+      const double ensemble =
+          MicrosecondsPerPoint(batch_size, [&] { trained.ensemble.Answer(batch, false); });
+      const double with_tangent =
+          MicrosecondsPerPoint(batch_size, [&] { trained.ensemble.Answer(batch, true); });
+      std::printf("%zu,%.2f,%.2f,%.3g,%.2f,%.2f\n", batch_size, fused, module, 1e6 / fused,
+                  ensemble, with_tangent);
+    }
+    std::fflush(stdout);
+
+    // One curve each way, on the same rig and mesh.
+    const std::string directory = (std::filesystem::temp_directory_path() /
+                                   ("gonogo_bench_fe_ann_" + std::to_string(::getpid())))
+                                      .string();
+    trained.ensemble.Save(directory);
+    tiers::SurrogateModelRecord record;
+    record.id = "bench";
+    record.directory = directory;
+    record.soil_parameters = CanonicalText(entry->parameters);
+    record.fe_de_preset = preset;
+    tiers::FeAnnOptions options;
+    options.fe_de = fe_de;
+    const tiers::FeAnnTier fe_ann(options, std::make_shared<tiers::ListedSurrogateModels>(
+                                               std::vector<tiers::SurrogateModelRecord>{record}));
+    TractionRequest request;
+    request.soil.soil_name = soil_name;
+    request.tyre.diameter_m = 0.5;
+    request.tyre.width_m = 0.2;
+    request.tyre.section_height_m = 0.1;
+    request.wheel_load_n = load_n;
+    request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+
+    auto start = std::chrono::steady_clock::now();
+    const tiers::FeDeRunReport de = tiers::FeDeTier(fe_de).Run(request, {});
+    const double de_s = Since(start);
+    std::printf("fe-de curve: %.1f s wall, %d elements, %d FE steps; peak RSS %.0f MB\n", de_s,
+                de.elements, de.fe_steps, PeakRssMb());
+    start = std::chrono::steady_clock::now();
+    const tiers::AnnRunReport ann = fe_ann.Run(request, {});
+    const double ann_s = Since(start);
+    const double rest_s =
+        ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
+    std::printf("fe-ann curve: %.2f s wall (%.1fx): network %.2f s (%lld point updates, %.1f us "
+                "each), fallbacks %d in %.2f s, model load %.3f s, FE and contact %.2f s; peak "
+                "RSS %.0f MB\n",
+                ann_s, de_s / ann_s, ann.network_seconds,
+                static_cast<long long>(ann.network_point_updates),
+                1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
+                ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
+    const double radius_m = 0.25;
+    double pull = 0, torque = 0, sinkage = 0;
+    for (std::size_t k = 0; k < std::min(ann.curve.points.size(), de.curve.points.size()); ++k) {
+      const TractionPoint& a = ann.curve.points[k];
+      const TractionPoint& d = de.curve.points[k];
+      pull = std::max(pull, std::abs(a.drawbar_pull_n - d.drawbar_pull_n) / load_n);
+      torque = std::max(torque, std::abs(a.torque_nm - d.torque_nm) / (radius_m * load_n));
+      sinkage = std::max(sinkage, std::abs(a.sinkage_m - d.sinkage_m) / radius_m);
+    }
+    std::printf("fe-ann against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
+                "%.1f %% of rW, sinkage %.1f %% of r\n",
+                100 * pull, 100 * torque, 100 * sinkage);
+    std::filesystem::remove_all(directory);
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "gonogo-bench-fe-ann: %s\n", e.what());
+    return 1;
+  }
+}
