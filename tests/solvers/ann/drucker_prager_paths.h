@@ -24,8 +24,9 @@ inline const material::DruckerPrager& Soil() {
   return *soil;
 }
 
-inline StrainHistory Path(LabPath path, double pressure_pa, double max_strain,
-                          std::uint64_t seed = 1) {
+// A 60-step laboratory path on `model` (walk steps of 5e-4).
+inline StrainHistory PathOn(const material::ConstitutiveModel& model, LabPath path,
+                            double pressure_pa, double max_strain, std::uint64_t seed = 1) {
   LabPathSpec spec;
   spec.path = path;
   spec.pressure_pa = pressure_pa;
@@ -33,9 +34,14 @@ inline StrainHistory Path(LabPath path, double pressure_pa, double max_strain,
   spec.steps = 60;
   spec.seed = seed;
   spec.walk_step_strain = 5e-4;
-  StrainHistory history = RunLabPath(Soil(), spec);
+  StrainHistory history = RunLabPath(model, spec);
   EXPECT_TRUE(history.stopped_reason.empty()) << history.stopped_reason;
   return history;
+}
+
+inline StrainHistory Path(LabPath path, double pressure_pa, double max_strain,
+                          std::uint64_t seed = 1) {
+  return PathOn(Soil(), path, pressure_pa, max_strain, seed);
 }
 
 // Triaxials and simple shears at 10-80 kPa, unload-reload and isotropic paths, 24 random walks.

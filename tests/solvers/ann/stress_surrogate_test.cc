@@ -131,14 +131,7 @@ TEST(StressSurrogate, FineTunedFromAnotherSoilBeatsScratchOnTheSameFewPaths) {
   stiffer.dilation_angle_deg = 2;
   const material::DruckerPrager other(stiffer);
   const auto path = [&](LabPath kind, double pressure_pa, double max_strain, std::uint64_t seed) {
-    LabPathSpec spec;
-    spec.path = kind;
-    spec.pressure_pa = pressure_pa;
-    spec.max_strain = max_strain;
-    spec.steps = 60;
-    spec.seed = seed;
-    spec.walk_step_strain = 5e-4;
-    return RunLabPath(other, spec);
+    return testing::PathOn(other, kind, pressure_pa, max_strain, seed);
   };
   const std::vector<StrainHistory> few = {path(LabPath::kTriaxial, 20e3, 0.02, 1),
                                           path(LabPath::kSimpleShear, 50e3, 0.04, 1),
