@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -58,6 +59,8 @@ struct CommandLine {
   std::vector<double> validate_loads_n;
   std::string register_data_dir;  // non-empty: register each MLP ensemble there
   std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
+  double rest_kpa = 0;            // > 0: only the rest test at this pressure
+  int rest_steps = 200;
   double tune_learning_rate = 1e-3;
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
@@ -298,6 +301,37 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   }
 }
 
+// The RVE at rest: settled isotropically at `line.rest_kpa`, then `line.rest_steps` zero
+// increments, each committed. Prints the mean stress p and the deviatoric q (von Mises) every
+// tenth step: what an FE point held still would see (a surrogate anchored at rest sees nothing).
+int RunRestTest(const CommandLine& line, const dem::rve::RveMaterial& rve) {
+  dem::rve::Rve settled = rve.initial();
+  settled.SettleIsotropic(line.rest_kpa * 1e3);
+  std::unique_ptr<material::MaterialState> state = rve.RestoreState(settled.Save());
+  std::printf("# rest test, %s, preset %s: settled at %g kPa, then %d zero increments\n",
+              line.soil.c_str(), line.preset.c_str(), line.rest_kpa, line.rest_steps);
+  std::printf("step,p_pa,q_pa,p_change_pct\n");
+  double first_p = 0;
+  for (int step = 0; step <= line.rest_steps; ++step) {
+    material::PointIncrement zero;
+    zero.committed = state.get();
+    std::vector<material::PointResponse> answer = rve.Update({zero}, false);
+    if (answer.at(0).status != material::UpdateStatus::kOk) {
+      throw NumericalError("rest step " + std::to_string(step) + ": " + answer.at(0).reason);
+    }
+    const Matrix3& sigma = answer.at(0).stress_pa;
+    const double p = -sigma.trace() / 3;
+    const Matrix3 deviator = sigma + p * Matrix3::Identity();
+    const double q = std::sqrt(1.5 * deviator.squaredNorm());
+    if (step == 0) first_p = p;
+    if (step % 10 == 0 || step == line.rest_steps) {
+      std::printf("%d,%.1f,%.1f,%.3f\n", step, p, q, 100 * (p - first_p) / first_p);
+    }
+    state = std::move(answer.at(0).state);
+  }
+  return 0;
+}
+
 int Run(const CommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
@@ -314,6 +348,7 @@ int Run(const CommandLine& line) {
   const tiers::FeDeOptions preset = tiers::FeDeOptions::Preset(line.preset);
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));
+  if (line.rest_kpa > 0) return RunRestTest(line, *rve);
   const auto start = std::chrono::steady_clock::now();
   tiers::SurrogateRecipe recipe;
   recipe.steps = line.steps;
@@ -464,6 +499,13 @@ int main(int argc, char** argv) {
   app.add_option("--tune-learning-rate", line.tune_learning_rate,
                  "Adam's learning rate when fine-tuning")
       ->check(CLI::Range(1e-8, 0.5))
+      ->capture_default_str();
+  app.add_option("--rest-kpa", line.rest_kpa,
+                 "only the rest test: the RVE settled at this pressure (kPa), then --rest-steps "
+                 "zero increments; prints its stress as it drifts")
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--rest-steps", line.rest_steps, "zero increments of the rest test")
+      ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--members", line.members, "ensemble members")
       ->check(CLI::Range(3, 64))
