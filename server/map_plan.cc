@@ -52,15 +52,17 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
   std::unordered_map<std::string, int> task_of_key;
   plan.unit_axle_task.resize(plan.units.size());
   for (size_t u = 0; u < plan.units.size(); ++u) {
+    // What the tier chooses depends on the soil alone (fe-ann: its model): once per unit.
+    TractionRequest unit;
+    unit.soil = SoilForTier(tier, SoilState{plan.units[u].rating_cone_index_pa,
+                                            plan.units[u].soil_name, plan.units[u].parameters});
+    unit.surrogate_model = surrogate_model;
+    tier.ResolveChoices(unit, "");
     for (size_t a = 0; a < vehicle.axles.size(); ++a) {
-      TractionRequest r;
-      r.soil = SoilForTier(tier, SoilState{plan.units[u].rating_cone_index_pa,
-                                           plan.units[u].soil_name, plan.units[u].parameters});
+      TractionRequest r = unit;
       r.tyre = vehicle.axles[a].tyre;
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;
-      r.surrogate_model = surrogate_model;
-      tier.ResolveChoices(r, "");
       TractionRequest q = cache::Quantise(r);
       std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
       auto [it, inserted] = task_of_key.try_emplace(key, static_cast<int>(plan.tasks.size()));

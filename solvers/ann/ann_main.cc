@@ -208,19 +208,15 @@ void Validate(const CommandLine& line, const std::string& model_directory,
     const auto start = std::chrono::steady_clock::now();
     const tiers::AnnRunReport ann = fe_ann.Run(request, {});
     const double seconds = Since(start);
-    const double radius_m = 0.5 * line.rig_diameter_m;
-    double pull = 0, torque = 0, sinkage = 0;
     const auto& a = ann.curve.points;
     const auto& d = reference.run.curve.points;
-    for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
-      pull = std::max(pull, std::abs(a[k].drawbar_pull_n - d[k].drawbar_pull_n) / load_n);
-      torque = std::max(torque, std::abs(a[k].torque_nm - d[k].torque_nm) / (radius_m * load_n));
-      sinkage = std::max(sinkage, std::abs(a[k].sinkage_m - d[k].sinkage_m) / radius_m);
-    }
+    const tiers::CurveDifference worst =
+        tiers::WorstDifference(ann.curve, reference.run.curve, request);
     std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%.2f,%.2f,%.2f\n", architecture.c_str(),
                 load_n, reference.seconds, seconds, reference.seconds / seconds,
-                ann.network_seconds, ann.fallback_seconds, ann.fallbacks, 100 * pull,
-                100 * torque, 100 * sinkage);
+                ann.network_seconds, ann.fallback_seconds, ann.fallbacks,
+                100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
+                100 * worst.sinkage_over_r);
     for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
       std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
                   a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
@@ -236,6 +232,7 @@ struct Study {
   std::vector<StrainHistory> training, held_out;
   std::vector<std::string> held_out_names;
   std::map<double, FeDeReference> references;  // fe-de curves by load
+  std::string data_hash;                       // of `training` (HistoriesHash)
 };
 
 // One trained ensemble's row (training figures, held-out errors, evaluation cost), then, as asked,
@@ -248,8 +245,10 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   for (const TrainingReport& report : reports) final_loss += report.final_loss / reports.size();
   std::printf("%s,%zu,%d,%lld,%.1f,%.3g,", name.c_str(), ensemble.size(), epochs,
               static_cast<long long>(reports.front().samples), train_s, final_loss);
+  std::vector<double> held_out_errors;  // replayed once: the row and the record both show them
   for (const StrainHistory& history : study.held_out) {
-    std::printf("%.2f,", 100 * ReplayError(ensemble, history));
+    held_out_errors.push_back(ReplayError(ensemble, history));
+    std::printf("%.2f,", 100 * held_out_errors.back());
   }
   const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000);
   std::printf("%.2f\n",
@@ -266,14 +265,13 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     record.fe_de_preset = line.preset;
     record.architecture = ensemble.member(0).architecture();
     record.members = static_cast<int>(ensemble.size());
-    record.data_hash = tiers::HistoriesHash(study.training);
+    record.data_hash = study.data_hash;
     record.samples = reports.front().samples;
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
     for (std::size_t k = 0; k < study.held_out.size(); ++k) {
-      const double error = ReplayError(ensemble, study.held_out[k]);
-      record.held_out.push_back({study.held_out_names[k], error});
-      record.worst_held_out_error = std::max(record.worst_held_out_error, error);
+      record.held_out.push_back({study.held_out_names[k], held_out_errors[k]});
+      record.worst_held_out_error = std::max(record.worst_held_out_error, held_out_errors[k]);
     }
     record.training_seconds = train_s;
     record.from_model = from_model;
@@ -404,7 +402,8 @@ int Run(const CommandLine& line) {
     WriteHistoriesNpy(line.out + "/training.npy", training_all);
     WriteHistoriesNpy(line.out + "/held_out.npy", held_out_all);
   }
-  Study study{entry->parameters, training_all, held_out_all, held_out_names, references};
+  Study study{entry->parameters, training_all, held_out_all, held_out_names, references,
+              tiers::HistoriesHash(training_all)};
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
   for (const std::string& name : held_out_names) std::printf("%s %%,", name.c_str());
   std::printf("us_per_point_batch_1000\n");

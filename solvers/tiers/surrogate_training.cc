@@ -137,6 +137,24 @@ RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& requ
   return recorded;
 }
 
+CurveDifference WorstDifference(const TractionCurve& a, const TractionCurve& b,
+                                const TractionRequest& request) {
+  const double load_n = request.wheel_load_n;
+  const double radius_m = 0.5 * request.tyre.diameter_m;
+  CurveDifference worst;
+  for (std::size_t k = 0; k < std::min(a.points.size(), b.points.size()); ++k) {
+    const TractionPoint& p = a.points[k];
+    const TractionPoint& q = b.points[k];
+    worst.drawbar_pull_over_w =
+        std::max(worst.drawbar_pull_over_w, std::abs(p.drawbar_pull_n - q.drawbar_pull_n) / load_n);
+    worst.torque_over_rw =
+        std::max(worst.torque_over_rw, std::abs(p.torque_nm - q.torque_nm) / (radius_m * load_n));
+    worst.sinkage_over_r =
+        std::max(worst.sinkage_over_r, std::abs(p.sinkage_m - q.sinkage_m) / radius_m);
+  }
+  return worst;
+}
+
 std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories) {
   std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a, 64 bit
   for (const ann::StrainHistory& history : histories) {

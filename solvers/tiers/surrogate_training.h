@@ -82,6 +82,17 @@ struct RecordedRigRun {
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
                               const ComputeContext& context = {});
 
+// The largest differences between two curves of the same request over their common slips: drawbar
+// pull over the wheel load W, torque over r W, sinkage over r (r = d / 2): the measures of
+// fe-ann against fe-de.
+struct CurveDifference {
+  double drawbar_pull_over_w = 0;
+  double torque_over_rw = 0;
+  double sinkage_over_r = 0;
+};
+CurveDifference WorstDifference(const TractionCurve& a, const TractionCurve& b,
+                                const TractionRequest& request);
+
 // FNV-1a (64 bit, hex) of the histories' blobs (strain_history.h): which data made a model.
 std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories);
 

@@ -169,18 +169,11 @@ int main(int argc, char** argv) {
                 static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
                 ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
-    const double radius_m = 0.25;
-    double pull = 0, torque = 0, sinkage = 0;
-    for (std::size_t k = 0; k < std::min(ann.curve.points.size(), de.curve.points.size()); ++k) {
-      const TractionPoint& a = ann.curve.points[k];
-      const TractionPoint& d = de.curve.points[k];
-      pull = std::max(pull, std::abs(a.drawbar_pull_n - d.drawbar_pull_n) / load_n);
-      torque = std::max(torque, std::abs(a.torque_nm - d.torque_nm) / (radius_m * load_n));
-      sinkage = std::max(sinkage, std::abs(a.sinkage_m - d.sinkage_m) / radius_m);
-    }
+    const tiers::CurveDifference worst = tiers::WorstDifference(ann.curve, de.curve, request);
     std::printf("fe-ann against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
                 "%.1f %% of rW, sinkage %.1f %% of r\n",
-                100 * pull, 100 * torque, 100 * sinkage);
+                100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
+                100 * worst.sinkage_over_r);
     std::filesystem::remove_all(directory);
     return 0;
   } catch (const std::exception& e) {

@@ -190,20 +190,17 @@ TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
             << report.network_point_updates << " point updates, fallbacks "
             << report.fallbacks << ", " << report.fallback_seconds
             << " s, model load " << report.model_load_seconds << " s\n";
-  const double load_n = Request().wheel_load_n;
-  const double radius_m = 0.5 * Request().tyre.diameter_m;
-  double worst_pull = 0, worst_torque = 0, worst_sinkage = 0;
   for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
     const TractionPoint& ann = report.curve.points[k];
     const TractionPoint& de = fe_de_->curve.points[k];
     std::cout << "  s " << ann.slip << ": D " << ann.drawbar_pull_n << " (fe-de "
               << de.drawbar_pull_n << ") N, T " << ann.torque_nm << " (" << de.torque_nm
               << ") N m, z " << 1e3 * ann.sinkage_m << " (" << 1e3 * de.sinkage_m << ") mm\n";
-    worst_pull = std::max(worst_pull, std::abs(ann.drawbar_pull_n - de.drawbar_pull_n) / load_n);
-    worst_torque =
-        std::max(worst_torque, std::abs(ann.torque_nm - de.torque_nm) / (radius_m * load_n));
-    worst_sinkage = std::max(worst_sinkage, std::abs(ann.sinkage_m - de.sinkage_m) / radius_m);
   }
+  const CurveDifference worst = WorstDifference(report.curve, fe_de_->curve, Request());
+  const double worst_pull = worst.drawbar_pull_over_w;
+  const double worst_torque = worst.torque_over_rw;
+  const double worst_sinkage = worst.sinkage_over_r;
   std::cout << "  worst: D " << 100 * worst_pull << " % of W, T " << 100 * worst_torque
             << " % of rW, z " << 100 * worst_sinkage << " % of r\n";
   EXPECT_EQ(report.fallbacks, 0);
