@@ -88,6 +88,29 @@ const std::vector<std::string>& Migrations() {
       R"sql(
       ALTER TABLE jobs ADD COLUMN kind TEXT NOT NULL DEFAULT 'map';
       )sql",
+      // 5 -> 6: RVE strain-path histories, the fe-ann tier's training data (dataset_store.h).
+      R"sql(
+      CREATE TABLE rve_histories (
+        id INTEGER PRIMARY KEY,
+        history_key TEXT NOT NULL UNIQUE,
+        dataset TEXT NOT NULL,
+        soil_name TEXT NOT NULL,
+        soil_parameters TEXT NOT NULL,
+        fe_de_preset TEXT NOT NULL,
+        rve_version TEXT NOT NULL,
+        path_kind TEXT NOT NULL,
+        path_name TEXT NOT NULL,
+        role TEXT NOT NULL,
+        seed INTEGER NOT NULL,
+        steps INTEGER NOT NULL,
+        history BLOB NOT NULL,
+        code_version TEXT NOT NULL,
+        computed_by TEXT NOT NULL,
+        compute_seconds REAL NOT NULL,
+        created_unix_ms INTEGER NOT NULL
+      );
+      CREATE INDEX rve_histories_by_dataset ON rve_histories (dataset, id);
+      )sql",
   };
   return kMigrations;
 }

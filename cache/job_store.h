@@ -19,6 +19,7 @@ const char* JobStateName(JobState state);
 
 inline constexpr char kMapJob[] = "map";      // request: a serialised gonogo.v1.MapRequest
 inline constexpr char kCurveJob[] = "curve";  // request: a serialised GetTractionCurveRequest
+inline constexpr char kTrainJob[] = "train";  // request: a serialised TrainSurrogateRequest
 
 struct JobRecord {
   std::string id;

@@ -25,13 +25,6 @@ int RunTiers(Client& client) {
   return kExitOk;
 }
 
-// Shortest form of a number ("0.293", "1.5e+09", "inf").
-std::string FormatNumber(double v) {
-  std::ostringstream out;
-  out << std::setprecision(6) << v;
-  return out.str();
-}
-
 std::string RangeText(const v1::SoilParameterInfo& p) {
   return std::string(p.min_open() ? "(" : "[") + FormatNumber(p.min()) + ", " +
          FormatNumber(p.max()) + (p.max_open() ? ")" : "]");
@@ -76,54 +69,7 @@ int RunSoils(Client& client, const std::string& only) {
   return kExitOk;
 }
 
-// A fraction as a percentage with one decimal ("3.2 %").
-std::string Percent(double fraction) {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(1) << 100 * fraction << " %";
-  return out.str();
-}
-
-int RunModels(Client& client, const std::string& soil) {
-  grpc::ClientContext ctx;
-  v1::ListSurrogateModelsRequest request;
-  request.set_soil_name(soil);
-  v1::ListSurrogateModelsResponse resp;
-  const grpc::Status s = client.stub().ListSurrogateModels(&ctx, request, &resp);
-  if (!s.ok()) return Fail(s);
-  if (resp.models().empty()) {
-    std::cout << "no surrogate models" << (soil.empty() ? "" : " for " + soil)
-              << " (gonogo-ann --register trains and registers one)\n";
-    return kExitOk;
-  }
-  for (const auto& m : resp.models()) {
-    std::cout << m.id() << "\n"
-              << "  soil:      " << (m.soil_name().empty() ? "(explicit parameters)" : m.soil_name())
-              << ", RVEs of the " << m.fe_de_preset() << " fe-de configuration\n"
-              << "  network:   " << m.architecture() << ", " << m.members() << " members"
-              << (m.from_model().empty() ? "" : ", fine-tuned from " + m.from_model()) << "\n"
-              << "  data:      " << m.samples() << " steps, hash " << m.data_hash() << ", trained in "
-              << FormatNumber(m.training_seconds()) << " s\n"
-              << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
-              << FormatNumber(m.spread_threshold()) << "\n"
-              << "  held out:  worst " << Percent(m.worst_held_out_error());
-    for (const auto& h : m.held_out()) {
-      std::cout << "; " << h.path() << " " << Percent(h.replay_error());
-    }
-    std::cout << "\n  made by:   gonogo " << m.code_version() << ", unix ms "
-              << m.created_unix_ms() << "\n";
-  }
-  return kExitOk;
-}
-
 }  // namespace
-
-Command AddModelsCommand(CLI::App& parent) {
-  auto soil = std::make_shared<std::string>();
-  CLI::App* models = parent.add_subcommand(
-      "models", "the fe-ann tier's surrogate models: soil, network, data, envelope, errors");
-  models->add_option("--soil", *soil, "only this soil's models")->type_name("NAME");
-  return {models, [soil](Client& client) { return RunModels(client, *soil); }};
-}
 
 Command AddTiersCommand(CLI::App& parent) {
   CLI::App* tiers =

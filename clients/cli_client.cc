@@ -53,6 +53,12 @@ bool IsPlainFileName(const std::string& name) {
 
 }  // namespace
 
+std::string FormatNumber(double value) {
+  std::ostringstream out;
+  out << std::setprecision(6) << value;
+  return out.str();
+}
+
 std::string ReadFile(const std::string& path, const std::string& what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw UsageError(what + ": cannot read " + path);
@@ -121,29 +127,46 @@ grpc::Status Client::Watch(const std::string& id, v1::JobStatus* last) {
   return reader->Finish();
 }
 
-grpc::Status Client::Download(const std::string& id, const std::string& out_dir,
-                              std::vector<std::string>* written) {
+namespace {
+
+// Writes the streamed files into `out_dir` (created when missing), one file per name.
+grpc::Status ReceiveFiles(grpc::ClientReader<v1::ResultChunk>& reader, const std::string& out_dir,
+                          std::vector<std::string>* written) {
   fs::create_directories(out_dir);
-  grpc::ClientContext ctx;
-  v1::DownloadResultRequest req;
-  req.set_job_id(id);
-  auto reader = stub_->DownloadResult(&ctx, req);
   v1::ResultChunk chunk;
   std::ofstream out;
   std::string current;
-  while (reader->Read(&chunk)) {
+  while (reader.Read(&chunk)) {
     if (chunk.product() != current) {
       out.close();
       current = chunk.product();
       if (!IsPlainFileName(current)) {
-        return {grpc::StatusCode::INTERNAL, "server sent a bad product name"};
+        return {grpc::StatusCode::INTERNAL, "server sent a bad file name"};
       }
       out.open(fs::path(out_dir) / current, std::ios::binary | std::ios::trunc);
       written->push_back((fs::path(out_dir) / current).string());
     }
     out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
   }
-  return reader->Finish();
+  return reader.Finish();
+}
+
+}  // namespace
+
+grpc::Status Client::Download(const std::string& id, const std::string& out_dir,
+                              std::vector<std::string>* written) {
+  grpc::ClientContext ctx;
+  v1::DownloadResultRequest req;
+  req.set_job_id(id);
+  auto reader = stub_->DownloadResult(&ctx, req);
+  return ReceiveFiles(*reader, out_dir, written);
+}
+
+grpc::Status Client::ExportDataset(const v1::ExportDatasetRequest& request,
+                                   const std::string& out_dir, std::vector<std::string>* written) {
+  grpc::ClientContext ctx;
+  auto reader = stub_->ExportDataset(&ctx, request);
+  return ReceiveFiles(*reader, out_dir, written);
 }
 
 int Client::WaitUntilDone(const std::string& id, const std::string& what) {

@@ -43,6 +43,9 @@ Message ReadJson(const std::string& path, const std::string& what) {
   return m;
 }
 
+// Shortest form of a number ("0.293", "1.5e+09", "inf").
+std::string FormatNumber(double value);
+
 // Prints "gonogo: CODE: message" on stderr; returns kExitServer.
 int Fail(const grpc::Status& s);
 
@@ -61,6 +64,9 @@ class Client {
   // paths.
   grpc::Status Download(const std::string& id, const std::string& out_dir,
                         std::vector<std::string>* written);
+  // Writes a dataset's export (ExportDataset) into `out_dir`, as Download does.
+  grpc::Status ExportDataset(const v1::ExportDatasetRequest& request, const std::string& out_dir,
+                             std::vector<std::string>* written);
 
   // Watches the job and, when it ends other than DONE, says so on stderr. Returns kExitOk when it
   // is DONE, kExitJobFailed when it failed or was cancelled, kExitServer when watching failed.

@@ -1,6 +1,7 @@
 #include "server/convert.h"
 
 #include <algorithm>
+#include <memory>
 
 #include "solvers/common/errors.h"
 
@@ -132,6 +133,31 @@ mobility::Criteria CriteriaFromProto(const v1::Criteria& p) {
   return c;
 }
 
+v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
+  v1::SurrogateModel out;
+  out.set_id(m.id);
+  out.set_soil_name(m.soil_name);
+  out.set_soil_parameters(m.soil_parameters);
+  out.set_fe_de_preset(m.fe_de_preset);
+  out.set_architecture(m.architecture);
+  out.set_members(static_cast<uint32_t>(m.members));
+  out.set_data_hash(m.data_hash);
+  out.set_samples(m.samples);
+  out.set_distance_threshold(m.distance_threshold);
+  out.set_spread_threshold(m.spread_threshold);
+  for (const tiers::HeldOutResult& h : m.held_out) {
+    v1::HeldOutError* e = out.add_held_out();
+    e->set_path(h.path);
+    e->set_replay_error(h.replay_error);
+  }
+  out.set_worst_held_out_error(m.worst_held_out_error);
+  out.set_training_seconds(m.training_seconds);
+  out.set_from_model(m.from_model);
+  out.set_code_version(m.code_version);
+  out.set_created_unix_ms(m.created_unix_ms);
+  return out;
+}
+
 v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   v1::WorkerTask w;
   w.set_task_id(t.task_id);
@@ -145,6 +171,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   for (double s : t.request.slips) w.add_slips(s);
   w.set_threads(t.needs.threads);
   w.set_checkpoint_dir(t.checkpoint_dir);
+  if (t.training) *w.mutable_training() = *t.training;
   return w;
 }
 
@@ -161,6 +188,7 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.needs.ranks = std::max(1, w.group_ranks_size());
   t.needs.threads = std::max(1, w.threads());
   t.checkpoint_dir = w.checkpoint_dir();
+  if (w.has_training()) t.training = std::make_shared<const v1::TrainingWork>(w.training());
   return t;
 }
 
@@ -176,6 +204,7 @@ v1::WorkerResult ToWorkerResult(const TaskResult& r) {
   w.set_compute_seconds(r.compute_seconds);
   w.set_immobile_reason(r.curve.immobile_reason);
   for (const TractionPoint& p : r.curve.points) *w.add_points() = ToProto(p);
+  w.set_training_output(r.training_output);
   return w;
 }
 
@@ -197,6 +226,7 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   for (const auto& p : w.points()) r.curve.points.push_back(FromProto(p));
   r.computed_by = computed_by;
   r.compute_seconds = w.compute_seconds();
+  r.training_output = w.training_output();
   return r;
 }
 

@@ -10,6 +10,7 @@
 #include "solvers/common/traction.h"
 #include "solvers/mobility/gonogo.h"
 #include "solvers/mobility/vehicle.h"
+#include "solvers/tiers/surrogate_registry.h"
 
 namespace gonogo::server {
 
@@ -35,6 +36,9 @@ v1::TractionPoint ToProto(const TractionPoint& point);
 mobility::VehicleSpec VehicleFromProto(const v1::Vehicle& vehicle);
 // Applies the defaults and validates; throws InputError naming "criteria.<field>".
 mobility::Criteria CriteriaFromProto(const v1::Criteria& criteria);
+
+// A registered fe-ann model with its provenance, as ListSurrogateModels and training jobs show it.
+v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& model);
 
 v1::WorkerTask ToWorkerTask(const TaskSpec& task);
 TaskSpec FromWorkerTask(const v1::WorkerTask& task);

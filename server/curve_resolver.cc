@@ -93,7 +93,7 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       const size_t i = unsent.front();
       unsent.pop_front();
       TaskSpec spec;
-      spec.task_id = next_task_id_++;
+      spec.task_id = NewTaskId();
       spec.tier = tier.Name();
       spec.request = tasks[i].request;
       spec.debug_delay_ms = options.debug_delay_ms;

@@ -86,6 +86,9 @@ class CurveResolver {
                                   const ResolveOptions& options);
 
   WorkerPool& pool() { return pool_; }
+  // A fresh task id: one counter numbers every task of the pool (curves and training tasks), so
+  // that cancelling one caller's task never touches another's.
+  uint64_t NewTaskId() { return next_task_id_++; }
   // Long tasks (a tier expected to take kCheckpointedTaskSeconds or more) get a restart
   // directory under `root`, named by their cache key: a task stopped by a crash or a drain and
   // run again (the job resumed after a restart, or the same curve asked again) continues from its

@@ -333,6 +333,7 @@ void JobManager::RunJob(const std::string& id) {
   if (!rec || cache::IsTerminal(rec->state)) return;
   spdlog::info("job {} ({}, tier {}) started", id, rec->kind, rec->tier);
   if (rec->kind == cache::kCurveJob) return RunCurveJob(*rec, live);
+  if (rec->kind == cache::kTrainJob) return RunTrainJob(*rec, live);
 
   const auto started = std::chrono::steady_clock::now();
   v1::JobStatus status = StatusOf(*rec);

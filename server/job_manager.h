@@ -36,6 +36,10 @@ struct JobManagerConfig {
   uint32_t task_delay_ms = 0;   // fault-injection delay added to every task (tests, demos)
   int max_concurrent_jobs = 2;  // map jobs that run at once; the rest wait QUEUED
   geo::GeoLimits limits;
+  // The fe-de configuration the server runs (its RVE numerics make the fe-ann training data) and
+  // the fe-ann model registry (solvers/tiers/surrogate_registry.h); empty: no training jobs.
+  std::string fe_de_preset = "default";
+  std::string models_dir;
 };
 
 // Paths of a job's stored input rasters (empty when not sent).
@@ -52,6 +56,7 @@ class JobManager {
   // Directory for a new job's inputs, and a fresh job id.
   std::string NewJobId() const;
   std::string JobDir(const std::string& job_id) const;
+  const std::string& data_dir() const { return config_.data_dir; }
 
   // Validates everything a job needs before it is accepted: vehicle, criteria, tier, soil table and
   // the rasters themselves. Throws InputError / LimitError naming the field. Returns the loaded
@@ -64,6 +69,9 @@ class JobManager {
   // Validates a curve query (tier, tyre, load, soil: InputError naming the field) and persists it
   // as a job of kind "curve" (QUEUED).
   v1::Job SubmitCurve(const std::string& job_id, const v1::GetTractionCurveRequest& request);
+  // Validates a training request (soil, recipe, base model: InputError naming the field) and
+  // persists it as a job of kind "train" (QUEUED); server/train_job.cc.
+  v1::Job SubmitTraining(const std::string& job_id, const v1::TrainSurrogateRequest& request);
   // Re-queues the jobs a previous run left QUEUED or RUNNING. Call once, before Start().
   int ResumeUnfinished();
   void Start();
@@ -91,6 +99,7 @@ class JobManager {
   void Loop();
   void RunJob(const std::string& job_id);
   void RunCurveJob(const cache::JobRecord& record, const std::shared_ptr<Live>& live);
+  void RunTrainJob(const cache::JobRecord& record, const std::shared_ptr<Live>& live);
   // Persists a new QUEUED job and queues it.
   v1::Job Enqueue(cache::JobRecord record, std::shared_ptr<geo::TerrainLayers> terrain);
   void Publish(const std::string& job_id, const v1::JobStatus& status);

@@ -112,6 +112,8 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   config.limits.max_input_cells = o.max_cells;
   config.limits.max_output_cells = o.max_cells;
   config.max_concurrent_jobs = o.max_jobs;
+  config.fe_de_preset = o.tier_options.fe_de_preset;
+  config.models_dir = o.tier_options.models_dir;
   cache::CurveStore curves(db);
   server::CurveResolver resolver(curves, pool);
   // Restart files of long curves (fe-de); the worker ranks read them too, so under MPI the data

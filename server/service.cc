@@ -4,7 +4,9 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
+#include "cache/dataset_store.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
 #include "server/curve_resolver.h"
@@ -33,6 +35,40 @@ const char* RoleFileName(v1::RasterRole role) {
   }
 }
 
+// A CSV field: quoted, with its quotes doubled, when it holds a comma, a quote or a line break.
+std::string CsvQuoted(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+fs::path ExportsDir(const std::string& data_dir) { return fs::path(data_dir) / "exports"; }
+
+// Streams the files `names` of `dir`, one after another, in chunks of at most kChunkBytes.
+grpc::Status StreamFiles(grpc::ServerContext* context, grpc::ServerWriter<v1::ResultChunk>* writer,
+                         const fs::path& dir, const std::vector<std::string>& names) {
+  std::string buffer(kChunkBytes, '\0');
+  for (const std::string& name : names) {
+    const fs::path path = dir / name;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return {grpc::StatusCode::INTERNAL, "file " + name + " is missing on the server"};
+    const uint64_t total = fs::file_size(path);
+    uint64_t offset = 0;
+    do {
+      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      const auto n = static_cast<size_t>(in.gcount());
+      v1::ResultChunk chunk;
+      chunk.set_product(name);
+      chunk.set_offset(offset);
+      chunk.set_total_bytes(total);
+      chunk.set_data(buffer.data(), n);
+      if (context->IsCancelled() || !writer->Write(chunk)) return grpc::Status::CANCELLED;
+      offset += n;
+    } while (offset < total);
+  }
+  return grpc::Status::OK;
+}
 
 }  // namespace
 
@@ -40,11 +76,16 @@ MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
                                          const TierRegistry& tiers, CurveResolver& resolver,
                                          ServiceLimits limits, std::string models_dir)
     : jobs_(jobs),
+      db_(db),
       curves_(db),
       tiers_(tiers),
       resolver_(resolver),
       limits_(limits),
-      models_dir_(std::move(models_dir)) {}
+      models_dir_(std::move(models_dir)) {
+  // Dataset exports are staged here while they stream; what a crash left is of no use.
+  std::error_code ignored;
+  fs::remove_all(ExportsDir(jobs_.data_dir()), ignored);
+}
 
 grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
                                             grpc::ServerReader<v1::SubmitMapRequest>* reader,
@@ -181,26 +222,7 @@ grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
   if (wanted.empty()) {
     return {grpc::StatusCode::NOT_FOUND, "product: job has no product '" + request->product() + "'"};
   }
-  std::string buffer(kChunkBytes, '\0');
-  for (const std::string& name : wanted) {
-    const fs::path path = fs::path(jobs_.JobDir(request->job_id())) / "out" / name;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return {grpc::StatusCode::INTERNAL, "product " + name + " is missing on the server"};
-    const uint64_t total = fs::file_size(path);
-    uint64_t offset = 0;
-    do {
-      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-      const auto n = static_cast<size_t>(in.gcount());
-      v1::ResultChunk chunk;
-      chunk.set_product(name);
-      chunk.set_offset(offset);
-      chunk.set_total_bytes(total);
-      chunk.set_data(buffer.data(), n);
-      if (context->IsCancelled() || !writer->Write(chunk)) return grpc::Status::CANCELLED;
-      offset += n;
-    } while (offset < total);
-  }
-  return grpc::Status::OK;
+  return StreamFiles(context, writer, fs::path(jobs_.JobDir(request->job_id())) / "out", wanted);
 }
 
 grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
@@ -369,29 +391,111 @@ grpc::Status MobilityServiceImpl::ListSurrogateModels(
     if (models_dir_.empty()) return grpc::Status::OK;
     for (const tiers::RegisteredSurrogate& m :
          tiers::SurrogateRegistry(models_dir_).List(request->soil_name())) {
-      v1::SurrogateModel* out = response->add_models();
-      out->set_id(m.id);
-      out->set_soil_name(m.soil_name);
-      out->set_soil_parameters(m.soil_parameters);
-      out->set_fe_de_preset(m.fe_de_preset);
-      out->set_architecture(m.architecture);
-      out->set_members(static_cast<uint32_t>(m.members));
-      out->set_data_hash(m.data_hash);
-      out->set_samples(m.samples);
-      out->set_distance_threshold(m.distance_threshold);
-      out->set_spread_threshold(m.spread_threshold);
-      for (const tiers::HeldOutResult& h : m.held_out) {
-        v1::HeldOutError* e = out->add_held_out();
-        e->set_path(h.path);
-        e->set_replay_error(h.replay_error);
-      }
-      out->set_worst_held_out_error(m.worst_held_out_error);
-      out->set_training_seconds(m.training_seconds);
-      out->set_from_model(m.from_model);
-      out->set_code_version(m.code_version);
-      out->set_created_unix_ms(m.created_unix_ms);
+      *response->add_models() = ToProto(m);
     }
     return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::TrainSurrogate(grpc::ServerContext*,
+                                                 const v1::TrainSurrogateRequest* request,
+                                                 v1::Job* response) {
+  try {
+    if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+    *response = jobs_.SubmitTraining(jobs_.NewJobId(), *request);
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::ListDatasets(grpc::ServerContext*,
+                                               const v1::ListDatasetsRequest* request,
+                                               v1::ListDatasetsResponse* response) {
+  try {
+    Require(request->soil_name().size() <= 256, "soil_name", "must be at most 256 characters");
+    for (const cache::DatasetSummary& d : cache::DatasetStore(db_).List(request->soil_name())) {
+      v1::Dataset* out = response->add_datasets();
+      out->set_dataset_id(d.dataset);
+      out->set_soil_name(d.soil_name);
+      out->set_soil_parameters(d.soil_parameters);
+      out->set_fe_de_preset(d.fe_de_preset);
+      out->set_rve_version(d.rve_version);
+      out->set_histories(static_cast<uint32_t>(d.histories));
+      out->set_training_histories(static_cast<uint32_t>(d.training_histories));
+      out->set_held_out_histories(static_cast<uint32_t>(d.held_out_histories));
+      out->set_steps(static_cast<uint64_t>(d.steps));
+      out->set_bytes(static_cast<uint64_t>(d.bytes));
+      out->set_compute_seconds(d.compute_seconds);
+      out->set_first_unix_ms(d.first_unix_ms);
+      out->set_last_unix_ms(d.last_unix_ms);
+    }
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
+grpc::Status MobilityServiceImpl::ExportDataset(grpc::ServerContext* context,
+                                                const v1::ExportDatasetRequest* request,
+                                                grpc::ServerWriter<v1::ResultChunk>* writer) {
+  // Staged in a private directory under the data directory, removed whatever happens.
+  struct Staging {
+    fs::path dir;
+    ~Staging() {
+      std::error_code ignored;
+      if (!dir.empty()) fs::remove_all(dir, ignored);
+    }
+  } staging;
+  try {
+    const std::string& id = request->dataset_id();
+    Require(!id.empty(), "dataset_id", "is missing");
+    Require(id.size() <= 320, "dataset_id", "must be at most 320 characters");
+    const std::string format = request->format().empty() ? "csv" : request->format();
+    Require(format == "csv" || format == "npy", "format", "must be csv or npy, not '" + format + "'");
+    const std::string& role = request->role();
+    Require(role.empty() || role == cache::kTrainingRole || role == cache::kHeldOutRole, "role",
+            "must be training, held-out or empty (both), not '" + role + "'");
+    const std::vector<cache::StoredHistory> rows = cache::DatasetStore(db_).Histories(id, role);
+    if (rows.empty()) {
+      return {grpc::StatusCode::NOT_FOUND,
+              "dataset_id: no histories in dataset '" + id + "'" +
+                  (role.empty() ? "" : " with role " + role) + " (`gonogo dataset` lists them)"};
+    }
+    std::vector<ann::StrainHistory> histories;
+    for (const cache::StoredHistory& row : rows) histories.push_back(ann::ParseHistory(row.history));
+    std::random_device random;
+    staging.dir = ExportsDir(jobs_.data_dir()) /
+                  (std::to_string(::getpid()) + "-" + std::to_string(random()));
+    fs::create_directories(staging.dir);
+    // Names are the dataset's id, which is made of catalogue names and hex: a safe file name.
+    const std::string base = id + (role.empty() ? "" : "-" + role);
+    std::vector<std::string> names;
+    if (format == "csv") {
+      names.push_back(base + ".csv");
+      ann::WriteHistoriesCsv((staging.dir / names.back()).string(), histories);
+    } else {
+      names.push_back(base + ".npy");
+      ann::WriteHistoriesNpy((staging.dir / names.back()).string(), histories);
+      names.push_back(base + ".npy.columns.txt");  // WriteHistoriesNpy writes it beside
+    }
+    // The provenance of each history, by its number in the table's `history` column.
+    names.push_back(base + ".paths.csv");
+    std::ofstream index(staging.dir / names.back());
+    index << "history,path_kind,path_name,role,seed,steps,fe_de_preset,rve_version,code_version,"
+             "computed_by,compute_seconds,created_unix_ms,stopped_reason\n";
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const cache::StoredHistory& r = rows[k];
+      index << k << "," << r.path_kind << "," << r.path_name << "," << r.role << "," << r.seed
+            << "," << r.steps << "," << r.fe_de_preset << "," << r.rve_version << ","
+            << r.code_version << "," << r.computed_by << "," << r.compute_seconds << ","
+            << r.created_unix_ms << "," << CsvQuoted(histories[k].stopped_reason) << "\n";
+    }
+    index.close();
+    if (!index) return {grpc::StatusCode::INTERNAL, "cannot write the dataset's index"};
+    return StreamFiles(context, writer, staging.dir, names);
   } catch (...) {
     return ToStatus(std::current_exception());
   }

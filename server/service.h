@@ -57,9 +57,16 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                               v1::ListSoilModelsResponse*) override;
   grpc::Status ListSurrogateModels(grpc::ServerContext*, const v1::ListSurrogateModelsRequest*,
                                    v1::ListSurrogateModelsResponse*) override;
+  grpc::Status TrainSurrogate(grpc::ServerContext*, const v1::TrainSurrogateRequest*,
+                              v1::Job*) override;
+  grpc::Status ListDatasets(grpc::ServerContext*, const v1::ListDatasetsRequest*,
+                            v1::ListDatasetsResponse*) override;
+  grpc::Status ExportDataset(grpc::ServerContext*, const v1::ExportDatasetRequest*,
+                             grpc::ServerWriter<v1::ResultChunk>*) override;
 
  private:
   JobManager& jobs_;
+  cache::Database& db_;
   cache::CurveStore curves_;
   const TierRegistry& tiers_;
   CurveResolver& resolver_;

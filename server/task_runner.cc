@@ -4,6 +4,8 @@
 #include <exception>
 #include <thread>
 
+#include "server/training_work.h"
+
 namespace gonogo::server {
 
 TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task,
@@ -17,6 +19,13 @@ TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task,
     for (uint32_t waited = 0; waited < task.debug_delay_ms; waited += 5) {
       if (context.Cancelled()) throw CancelledError();
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (task.training) {
+      result.training_output = RunTrainingWork(*task.training, context);
+      result.ok = true;
+      result.compute_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      return result;
     }
     const TractionTier& tier = tiers.Get(task.tier);
     task.request.Validate();

@@ -1,4 +1,4 @@
-// Runs one traction task on the calling thread: the code shared by every pool and by the MPI workers.
+// Runs one traction (or training) task on the calling thread: the code shared by every pool and by the MPI workers.
 #pragma once
 
 #include "server/worker_pool.h"

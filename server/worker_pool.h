@@ -5,8 +5,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 
+#include "gonogo/v1/worker.pb.h"
 #include "solvers/common/errors.h"
 #include "solvers/common/tier.h"
 #include "solvers/common/traction.h"
@@ -31,6 +33,9 @@ struct TaskSpec {
   TaskProgress progress;  // may be empty; called on a pool thread; never crosses MPI
   // Where the tier may keep restart files (ComputeContext::checkpoint_dir); empty: none.
   std::string checkpoint_dir;
+  // Set: a training task of a TrainSurrogate job (server/training_work.h) instead of a traction
+  // curve; `tier` and `request` are then unused, and the answer is TaskResult::training_output.
+  std::shared_ptr<const v1::TrainingWork> training;
 };
 
 struct TaskResult {
@@ -43,6 +48,7 @@ struct TaskResult {
   TractionCurve curve;
   std::string computed_by;    // "rank N", "ranks N,M" for a rank group, or "thread"
   double compute_seconds = 0;
+  std::string training_output;  // a training task's answer (TrainingWork)
 };
 
 using TaskCallback = std::function<void(TaskResult)>;

@@ -6,6 +6,7 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <fstream>
 #include <map>
 #include <cmath>
 #include <sstream>
@@ -293,6 +294,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   TrainingReport figures;
   figures.samples = samples;
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    if (options.stop && options.stop()) throw CancelledError();
     HalveLearningRateAtMilestones(optimizer, epoch, options.epochs);
     const torch::Tensor order = torch::randperm(samples, torch::kInt64);
     double loss_sum = 0;
@@ -385,17 +387,39 @@ std::vector<Vector6> StressSurrogate::StressIncrementsByModule(
 void StressSurrogate::Save(const std::string& path) const { SaveModule(impl_->module, path); }
 
 StressSurrogate StressSurrogate::Load(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError("model", "not a gonogo stress surrogate (" + path + "): unreadable");
+  return FromStream(file, path);
+}
+
+StressSurrogate StressSurrogate::FromBytes(const std::string& bytes) {
+  std::istringstream in(bytes);
+  return FromStream(in, std::to_string(bytes.size()) + " bytes");
+}
+
+StressSurrogate StressSurrogate::FromStream(std::istream& in, const std::string& what) {
   auto impl = std::make_unique<Impl>();
   try {
-    impl->module = torch::jit::load(path);
+    impl->module = torch::jit::load(in);
     impl->architecture = impl->module.attr("architecture").toStringRef();
     impl->module.eval();
     impl->fused = FusedOf(impl->module, impl->architecture);
   } catch (const c10::Error& e) {
-    throw InputError("model", "not a gonogo stress surrogate (" + path + "): " +
+    throw InputError("model", "not a gonogo stress surrogate (" + what + "): " +
                                   e.what_without_backtrace());
   }
   return StressSurrogate(std::move(impl));
+}
+
+std::string StressSurrogate::Bytes() const {
+  std::ostringstream out;
+  try {
+    impl_->module.save(out);
+  } catch (const c10::Error& e) {
+    throw std::runtime_error(std::string("cannot serialise the surrogate: ") +
+                             e.what_without_backtrace());
+  }
+  return out.str();
 }
 
 namespace {
@@ -489,6 +513,7 @@ RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<Strai
   TrainingReport figures;
   figures.samples = x_all.size(0);
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
+    if (options.stop && options.stop()) throw CancelledError();
     HalveLearningRateAtMilestones(optimizer, epoch, options.epochs);
     double loss_sum = 0, count = 0;
     for (const auto& [x, y] : batches) {

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <istream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,6 +47,8 @@ struct TrainingOptions {
   double learning_rate = 3e-3;  // Adam; halved at 50 %, 75 % and 90 % of the epochs
   std::uint64_t seed = 1;       // weights and batch order
   int threads = 1;              // torch intra-op threads (1: bit-reproducible training)
+  // Asked before each epoch; true stops the training with CancelledError (a cancelled job).
+  std::function<bool()> stop;
   void Validate(const std::string& field_prefix) const;
 };
 
@@ -97,11 +100,16 @@ class StressSurrogate {
   // such a module.
   void Save(const std::string& path) const;
   static StressSurrogate Load(const std::string& path);
+  // The same TorchScript file as bytes (a trained member crossing ranks); FromBytes throws as Load.
+  std::string Bytes() const;
+  static StressSurrogate FromBytes(const std::string& bytes);
 
   std::string architecture() const;
 
  private:
   struct Impl;
+  // Load and FromBytes: `what` names the source in errors.
+  static StressSurrogate FromStream(std::istream& in, const std::string& what);
   explicit StressSurrogate(std::unique_ptr<Impl> impl);
   // Train and FineTune: from random (seeded) weights and the data's standardisation, or from
   // `base`'s.

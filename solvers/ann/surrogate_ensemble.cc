@@ -117,6 +117,23 @@ SurrogateEnsemble SurrogateEnsemble::FineTune(const SurrogateEnsemble& base,
   return ensemble;
 }
 
+SurrogateEnsemble SurrogateEnsemble::Assemble(std::vector<StressSurrogate> members,
+                                              const std::vector<StrainHistory>& histories) {
+  if (members.size() < 3 || members.size() > 64) {
+    throw InputError("members", "must be 3 to 64 surrogates, not " + std::to_string(members.size()));
+  }
+  for (const StressSurrogate& member : members) {
+    if (member.architecture() != members.front().architecture()) {
+      throw InputError("members", "mix architectures (" + members.front().architecture() + ", " +
+                                      member.architecture() + ")");
+    }
+  }
+  SurrogateEnsemble ensemble;
+  ensemble.members_ = std::move(members);
+  ensemble.FitEnvelopeAndThresholds(histories);
+  return ensemble;
+}
+
 void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory>& histories) {
   std::vector<SurrogateInput> inputs;
   for (const StrainHistory& history : histories) {

@@ -66,6 +66,12 @@ class SurrogateEnsemble {
                                     const TrainingOptions& options,
                                     std::vector<TrainingReport>* reports = nullptr);
 
+  // Members trained elsewhere (one per pool task, say), put together: the envelope and the default
+  // thresholds fitted on `histories`, their training data, as Train does. Throws
+  // InputError("members", ...) for fewer than 3 or members of different architectures.
+  static SurrogateEnsemble Assemble(std::vector<StressSurrogate> members,
+                                    const std::vector<StrainHistory>& histories);
+
   std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
                                      bool want_tangent) const;
 

@@ -12,7 +12,8 @@ namespace gonogo::tiers {
 namespace {
 
 constexpr char kTrainHint[] =
-    "train and register one with `gonogo-ann --soil NAME --preset PRESET --register DATA_DIR` "
+    "train and register one with `gonogo train --soil NAME` (a job on the server's pool), or "
+    "offline with `gonogo-ann --soil NAME --preset PRESET --register DATA_DIR` "
     "(solvers/ann/README.md)";
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include "cache/curve_key.h"
 #include "cache/curve_store.h"
+#include "cache/dataset_store.h"
 #include "cache/database.h"
 #include "cache/job_store.h"
 
@@ -50,7 +51,7 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 5);
+  EXPECT_EQ(db.SchemaVersion(), 6);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
@@ -81,7 +82,7 @@ TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
   sqlite3_close(raw);
 
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 5);
+  EXPECT_EQ(db.SchemaVersion(), 6);
   CurveStore store(db);
   auto old = store.Find("old-key");
   ASSERT_TRUE(old.has_value());
@@ -230,6 +231,63 @@ TEST_F(StoreTest, JobsPersistTheirStateAndUnfinishedOnesAreFound) {
   EXPECT_DOUBLE_EQ(done->fraction_done, 1.0);
   EXPECT_EQ(jobs.List(2).front().id, "job-2");
   EXPECT_FALSE(jobs.Get("job-9").has_value());
+}
+
+TEST_F(StoreTest, HistoriesPersistGroupIntoDatasetsAndKeepTheirFirstCopy) {
+  const std::string sand = DatasetId("sand", "tiny", "dem-hertz-mindlin:grains=100");
+  const std::string other = DatasetId("sand", "tiny", "dem-hertz-mindlin:grains=200");
+  EXPECT_NE(sand, other) << "another parameter set is another dataset";
+  EXPECT_EQ(sand.rfind("sand-tiny-", 0), 0u) << sand;
+  const std::string blob("GNGHIS01\x00\x01\xff", 11);
+  {
+    Database db(path_);
+    DatasetStore store(db);
+    for (int k = 0; k < 3; ++k) {
+      StoredHistory h;
+      h.history_key = "key-" + std::to_string(k);
+      h.dataset = k < 2 ? sand : other;
+      h.soil_name = "sand";
+      h.soil_parameters = "p";
+      h.fe_de_preset = "tiny";
+      h.rve_version = "fe-de-1-tiny";
+      h.path_kind = "triaxial";
+      h.path_name = "triaxial " + std::to_string(k);
+      h.role = k == 1 ? kHeldOutRole : kTrainingRole;
+      h.seed = k;
+      h.steps = 10 + k;
+      h.history = blob;
+      h.computed_by = "rank 1";
+      h.compute_seconds = 0.5;
+      h.created_unix_ms = 1000 + k;
+      store.Put(h);
+    }
+    StoredHistory again = *store.Find("key-0");
+    again.computed_by = "rank 7";
+    store.Put(again);  // the same key again: the first copy stays
+  }
+  Database db(path_);
+  DatasetStore store(db);
+  const auto found = store.Find("key-0");
+  ASSERT_TRUE(found.has_value());
+  EXPECT_EQ(found->history, blob) << "binary histories survive";
+  EXPECT_EQ(found->computed_by, "rank 1");
+  EXPECT_FALSE(store.Find("key-9").has_value());
+  const std::vector<DatasetSummary> all = store.List();
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0].dataset, other) << "newest first";
+  EXPECT_EQ(all[1].dataset, sand);
+  EXPECT_EQ(all[1].histories, 2);
+  EXPECT_EQ(all[1].training_histories, 1);
+  EXPECT_EQ(all[1].held_out_histories, 1);
+  EXPECT_EQ(all[1].steps, 21);
+  EXPECT_EQ(all[1].bytes, 22);
+  EXPECT_DOUBLE_EQ(all[1].compute_seconds, 1.0);
+  EXPECT_EQ(all[1].first_unix_ms, 1000);
+  EXPECT_EQ(all[1].last_unix_ms, 1001);
+  EXPECT_TRUE(store.List("clay").empty());
+  EXPECT_EQ(store.Histories(sand).size(), 2u);
+  ASSERT_EQ(store.Histories(sand, kHeldOutRole).size(), 1u);
+  EXPECT_EQ(store.Histories(sand, kHeldOutRole)[0].path_name, "triaxial 1");
 }
 
 }  // namespace

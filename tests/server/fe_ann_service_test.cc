@@ -47,7 +47,7 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_EQ(refused.exit_code, 3) << refused.out;
   EXPECT_NE(refused.out.find("FAILED_PRECONDITION"), std::string::npos) << refused.out;
   EXPECT_NE(refused.out.find("surrogate_model"), std::string::npos) << refused.out;
-  EXPECT_NE(refused.out.find("gonogo-ann --soil NAME --preset PRESET --register"),
+  EXPECT_NE(refused.out.find("gonogo train --soil NAME"),
             std::string::npos)
       << refused.out;
 

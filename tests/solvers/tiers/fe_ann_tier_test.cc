@@ -135,7 +135,7 @@ TEST_F(FeAnnTierTest, ChoosesTheSoilsModelAndRefusesWhatItCannotAnswer) {
     ADD_FAILURE() << "a soil with no model was accepted";
   } catch (const PreconditionError& e) {
     EXPECT_EQ(e.field(), "surrogate_model");
-    EXPECT_NE(std::string(e.what()).find("gonogo-ann --soil NAME --preset PRESET --register"),
+    EXPECT_NE(std::string(e.what()).find("gonogo train --soil NAME"),
               std::string::npos)
         << e.what();
   }

@@ -1,0 +1,249 @@
+// gonogo models | train | dataset: the fe-ann tier's surrogate models and the RVE histories they
+// are trained on.
+//   gonogo models [--soil NAME]
+//   gonogo train --soil NAME [--hidden 64x64] [--from MODEL] [--epochs N] ... [--no-wait]
+//   gonogo dataset [--soil NAME]
+//   gonogo dataset export DATASET --out DIR [--format csv|npy] [--role training|held-out]
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "clients/cli_commands.h"
+
+namespace gonogo::cli {
+namespace {
+
+// A fraction as a percentage with one decimal ("3.2 %").
+std::string Percent(double fraction) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << 100 * fraction << " %";
+  return out.str();
+}
+
+void PrintModel(const v1::SurrogateModel& m) {
+  std::cout << m.id() << "\n"
+            << "  soil:      " << (m.soil_name().empty() ? "(explicit parameters)" : m.soil_name())
+            << ", RVEs of the " << m.fe_de_preset() << " fe-de configuration\n"
+            << "  network:   " << m.architecture() << ", " << m.members() << " members"
+            << (m.from_model().empty() ? "" : ", fine-tuned from " + m.from_model()) << "\n"
+            << "  data:      " << m.samples() << " steps, hash " << m.data_hash() << ", trained in "
+            << FormatNumber(m.training_seconds()) << " s\n"
+            << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
+            << FormatNumber(m.spread_threshold()) << "\n"
+            << "  held out:  worst " << Percent(m.worst_held_out_error());
+  for (const auto& h : m.held_out()) std::cout << "; " << h.path() << " " << Percent(h.replay_error());
+  std::cout << "\n  made by:   gonogo " << m.code_version() << ", unix ms " << m.created_unix_ms()
+            << "\n";
+}
+
+int RunModels(Client& client, const std::string& soil) {
+  grpc::ClientContext ctx;
+  v1::ListSurrogateModelsRequest request;
+  request.set_soil_name(soil);
+  v1::ListSurrogateModelsResponse resp;
+  const grpc::Status s = client.stub().ListSurrogateModels(&ctx, request, &resp);
+  if (!s.ok()) return Fail(s);
+  if (resp.models().empty()) {
+    std::cout << "no surrogate models" << (soil.empty() ? "" : " for " + soil)
+              << " (gonogo train --soil NAME trains and registers one)\n";
+    return kExitOk;
+  }
+  for (const auto& m : resp.models()) PrintModel(m);
+  return kExitOk;
+}
+
+struct TrainOptions {
+  v1::TrainSurrogateRequest request;
+  std::string hidden;  // "64x64"
+  std::vector<double> pressures_kpa;
+  bool no_wait = false;
+};
+
+// "64x64" -> {64, 64}; UsageError naming --hidden otherwise.
+std::vector<uint32_t> ParseWidths(const std::string& text) {
+  std::vector<uint32_t> widths;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, 'x')) {
+    try {
+      size_t used = 0;
+      const unsigned long width = std::stoul(item, &used);
+      if (used != item.size() || width == 0) throw std::invalid_argument(item);
+      widths.push_back(static_cast<uint32_t>(std::min(width, 1000000ul)));
+    } catch (const std::exception&) {
+      throw UsageError("--hidden: '" + text + "' is not layer widths such as 64x64");
+    }
+  }
+  if (widths.empty()) throw UsageError("--hidden: '" + text + "' is not layer widths such as 64x64");
+  return widths;
+}
+
+int RunTrain(Client& client, TrainOptions o) {
+  if (!o.hidden.empty()) {
+    for (uint32_t width : ParseWidths(o.hidden)) o.request.add_hidden_widths(width);
+  }
+  for (double p : o.pressures_kpa) o.request.add_pressures_kpa(p);
+  v1::Job job;
+  {
+    grpc::ClientContext ctx;
+    const grpc::Status s = client.stub().TrainSurrogate(&ctx, o.request, &job);
+    if (!s.ok()) return Fail(s);
+  }
+  std::cerr << "training job " << job.job_id() << " submitted\n";
+  if (o.no_wait) {
+    std::cout << job.job_id() << "\n";
+    return kExitOk;
+  }
+  if (const int rc = client.WaitUntilDone(job.job_id(), "training job"); rc != kExitOk) return rc;
+  grpc::ClientContext ctx;
+  v1::GetJobRequest get;
+  get.set_job_id(job.job_id());
+  v1::Job done;
+  const grpc::Status s = client.stub().GetJob(&ctx, get, &done);
+  if (!s.ok()) return Fail(s);
+  v1::SurrogateModel model;
+  if (!google::protobuf::util::JsonStringToMessage(done.summary_json(), &model).ok()) {
+    std::cerr << "gonogo: the server's model record is unreadable\n";
+    return kExitServer;
+  }
+  std::cout << "registered ";
+  PrintModel(model);
+  return kExitOk;
+}
+
+int RunDatasets(Client& client, const std::string& soil) {
+  grpc::ClientContext ctx;
+  v1::ListDatasetsRequest request;
+  request.set_soil_name(soil);
+  v1::ListDatasetsResponse resp;
+  const grpc::Status s = client.stub().ListDatasets(&ctx, request, &resp);
+  if (!s.ok()) return Fail(s);
+  if (resp.datasets().empty()) {
+    std::cout << "no datasets" << (soil.empty() ? "" : " for " + soil)
+              << " (gonogo train --soil NAME makes one)\n";
+    return kExitOk;
+  }
+  for (const auto& d : resp.datasets()) {
+    std::cout << d.dataset_id() << "\n"
+              << "  soil:      " << d.soil_name() << ", RVEs of the " << d.fe_de_preset()
+              << " fe-de configuration (" << d.rve_version() << ")\n"
+              << "  histories: " << d.histories() << " (" << d.training_histories()
+              << " training, " << d.held_out_histories() << " held out), " << d.steps()
+              << " steps, " << d.bytes() << " bytes\n"
+              << "  computed:  " << FormatNumber(d.compute_seconds()) << " s of RVE time, unix ms "
+              << d.first_unix_ms() << " to " << d.last_unix_ms() << "\n";
+  }
+  return kExitOk;
+}
+
+struct ExportOptions {
+  v1::ExportDatasetRequest request;
+  std::string out_dir;
+};
+
+int RunExport(Client& client, const ExportOptions& o) {
+  std::vector<std::string> written;
+  const grpc::Status s = client.ExportDataset(o.request, o.out_dir, &written);
+  if (!s.ok()) return Fail(s);
+  for (const std::string& path : written) std::cout << path << "\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+Command AddModelsCommand(CLI::App& parent) {
+  auto soil = std::make_shared<std::string>();
+  CLI::App* models = parent.add_subcommand(
+      "models", "the fe-ann tier's surrogate models: soil, network, data, envelope, errors");
+  models->add_option("--soil", *soil, "only this soil's models")->type_name("NAME");
+  return {models, [soil](Client& client) { return RunModels(client, *soil); }};
+}
+
+Command AddTrainCommand(CLI::App& parent) {
+  auto o = std::make_shared<TrainOptions>();
+  v1::TrainSurrogateRequest& r = o->request;
+  CLI::App* train = parent.add_subcommand(
+      "train", "train and register an fe-ann surrogate of a soil's DE RVE (a job on the pool)");
+  train->footer(
+      "The RVE strain paths run on the server's worker pool and are kept in its data (gonogo "
+      "dataset);\na later training on the same soil reuses them. Then each ensemble member is "
+      "trained on the pool,\nmeasured on held-out paths and registered (gonogo models).");
+  train->add_option_function<std::string>(
+           "--soil", [&r](const std::string& v) { r.set_soil_name(v); },
+           "a dem-hertz-mindlin soil of the catalogue (gonogo soils)")
+      ->type_name("NAME")
+      ->required();
+  train->add_option("--hidden", o->hidden, "the MLP's tanh layers [default: 64x64]")
+      ->type_name("WxW..");
+  train->add_flag_function(
+      "--unanchored", [&r](int64_t) { r.set_unanchored(true); },
+      "no anchoring at rest (d_sigma(0) not forced to 0)");
+  train->add_option_function<std::string>(
+           "--from", [&r](const std::string& v) { r.set_from_model(v); },
+           "transfer learning: fine-tune this registered model on this soil's data")
+      ->type_name("MODEL");
+  train->add_option_function<uint32_t>(
+           "--members", [&r](uint32_t v) { r.set_members(v); }, "ensemble members [default: 3]")
+      ->type_name("N");
+  train->add_option_function<uint32_t>(
+           "--epochs", [&r](uint32_t v) { r.set_epochs(v); },
+           "training epochs [default: 300; 100 when fine-tuning]")
+      ->type_name("N");
+  train->add_option_function<double>(
+           "--learning-rate", [&r](double v) { r.set_learning_rate(v); },
+           "Adam's learning rate [default: 3e-3; 1e-3 when fine-tuning]")
+      ->type_name("RATE");
+  train->add_option_function<uint32_t>(
+           "--steps", [&r](uint32_t v) { r.set_steps(v); },
+           "strain steps per path after settling [default: 50]")
+      ->type_name("N");
+  train->add_option_function<uint32_t>(
+           "--walks", [&r](uint32_t v) { r.set_walks(v); },
+           "random strain walks in the training set [default: 16]")
+      ->type_name("N");
+  train->add_option("--pressures-kpa", o->pressures_kpa,
+                    "confining pressures of the training paths, kPa, increasing "
+                    "[default: 2.5 5 10 20 40 80]")
+      ->type_name("KPA ...");
+  train->add_option_function<uint64_t>(
+           "--seed", [&r](uint64_t v) { r.set_seed(v); }, "first member's seed [default: 1]")
+      ->type_name("N");
+  train->add_option_function<std::string>(
+           "--name", [&r](const std::string& v) { r.set_name(v); }, "shown in job lists")
+      ->type_name("TEXT");
+  train->add_flag("--no-wait", o->no_wait, "print the job id and return at once");
+  return {train, [o](Client& client) { return RunTrain(client, *o); }};
+}
+
+Command AddDatasetCommand(CLI::App& parent) {
+  auto soil = std::make_shared<std::string>();
+  auto o = std::make_shared<ExportOptions>();
+  CLI::App* dataset = parent.add_subcommand(
+      "dataset", "the RVE strain-path histories the fe-ann models are trained on");
+  dataset->add_option("--soil", *soil, "only this soil's datasets")->type_name("NAME");
+  CLI::App* exported = dataset->add_subcommand(
+      "export", "write a dataset as a table (CSV or NumPy .npy) with an index of its paths");
+  exported->add_option_function<std::string>(
+              "DATASET", [o](const std::string& v) { o->request.set_dataset_id(v); },
+              "a dataset id (gonogo dataset lists them)")
+      ->required();
+  exported->add_option("--out", o->out_dir, "directory to write into")->required()->type_name("DIR");
+  exported
+      ->add_option_function<std::string>(
+          "--format", [o](const std::string& v) { o->request.set_format(v); },
+          "csv or npy [default: csv]")
+      ->check(CLI::IsMember({"csv", "npy"}))
+      ->type_name("csv|npy");
+  exported
+      ->add_option_function<std::string>(
+          "--role", [o](const std::string& v) { o->request.set_role(v); },
+          "only the histories made for training or held-out sets")
+      ->check(CLI::IsMember({"training", "held-out"}))
+      ->type_name("training|held-out");
+  return {dataset, [soil, o, exported](Client& client) {
+            return exported->parsed() ? RunExport(client, *o) : RunDatasets(client, *soil);
+          }};
+}
+
+}  // namespace gonogo::cli

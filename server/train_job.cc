@@ -1,0 +1,458 @@
+// The training half of the job manager: TrainSurrogate jobs (kind "train"). A job trains one
+// surrogate ensemble of a soil's DE RVE for the fe-ann tier, on the worker pool:
+//   1. the recipe's strain paths (solvers/tiers/surrogate_training.h: the training set and the
+//      held-out set) on the soil's RVE at the server's fe-de numerics, one pool task per path not
+//      already in the dataset store; each history is stored the moment it arrives, so a cancelled,
+//      drained or crashed job loses no finished path, and every later training on the same soil
+//      and configuration reuses them (cache/dataset_store.h);
+//   2. each ensemble member trained (or fine-tuned from a registered model's member) as a pool
+//      task on the stored training histories;
+//   3. the members assembled with their envelope (SurrogateEnsemble::Assemble), measured on the
+//      held-out histories and registered with their provenance (surrogate_registry.h).
+// The registered model is the job's summary (SurrogateModel as JSON) and product model.json.
+#include <google/protobuf/util/json_util.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+
+#include "cache/dataset_store.h"
+#include "server/convert.h"
+#include "server/job_manager.h"
+#include "server/job_records.h"
+#include "server/training_work.h"
+#include "solvers/ann/surrogate_ensemble.h"
+#include "solvers/common/errors.h"
+#include "solvers/dem/rve/rve_soil.h"
+#include "solvers/tiers/soil_catalogue.h"
+#include "solvers/tiers/surrogate_registry.h"
+#include "solvers/tiers/surrogate_training.h"
+
+namespace gonogo::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Scheduling estimate of one training task: the long lane of the pool's queue.
+constexpr double kTrainingTaskSeconds = 10;
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+const tiers::CatalogueEntry& RveSoil(const std::string& soil_name) {
+  Require(!soil_name.empty(), "soil_name", "is missing");
+  Require(soil_name.size() <= 256, "soil_name", "must be at most 256 characters");
+  const tiers::CatalogueEntry* entry =
+      tiers::BuiltinSoilCatalogue().Find(soil_name, dem::rve::kRveSoilModel);
+  if (entry == nullptr) {
+    throw InputError("soil_name", "no " + std::string(dem::rve::kRveSoilModel) + " soil '" +
+                                      soil_name + "' in the catalogue (`gonogo soils` lists them)");
+  }
+  return *entry;
+}
+
+// The request's recipe with the API's defaults ("0 means ..."), validated by field.
+tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool fine_tuning) {
+  tiers::SurrogateRecipe recipe;
+  if (request.steps() != 0) recipe.steps = static_cast<int>(std::min(request.steps(), 1000000u));
+  Require(recipe.steps <= 100000, "steps", "must be at most 100000");
+  if (request.walks() != 0) recipe.walks = static_cast<int>(std::min(request.walks(), 1000000u));
+  Require(recipe.walks <= 10000, "walks", "must be at most 10000");
+  if (request.pressures_kpa_size() > 0) {
+    Require(request.pressures_kpa_size() >= 2 && request.pressures_kpa_size() <= 64,
+            "pressures_kpa", "must hold 2 to 64 pressures");
+    recipe.pressures_pa.clear();
+    for (double kpa : request.pressures_kpa()) {
+      Require(std::isfinite(kpa) && kpa > 0 && kpa <= 1e6, "pressures_kpa",
+              "each must be a positive pressure up to 1 GPa, kPa");
+      recipe.pressures_pa.push_back(kpa * 1e3);
+    }
+    Require(std::is_sorted(recipe.pressures_pa.begin(), recipe.pressures_pa.end()),
+            "pressures_kpa", "must be in increasing order");
+  }
+  if (request.hidden_widths_size() > 0) {
+    Require(!fine_tuning, "hidden_widths", "a fine-tuned model keeps its base model's layers");
+    Require(request.hidden_widths_size() <= 16, "hidden_widths", "needs 1 to 16 hidden layers");
+    recipe.architecture.hidden_widths.clear();
+    for (uint32_t width : request.hidden_widths()) {
+      Require(width >= 1 && width <= 4096, "hidden_widths", "each layer 1 to 4096 wide");
+      recipe.architecture.hidden_widths.push_back(static_cast<int>(width));
+    }
+  }
+  Require(!(fine_tuning && request.unanchored()), "unanchored",
+          "a fine-tuned model keeps its base model's anchoring");
+  recipe.architecture.anchored = !request.unanchored();
+  if (request.members() != 0) {
+    Require(!fine_tuning, "members", "a fine-tuned model keeps its base model's members");
+    Require(request.members() >= 3 && request.members() <= 64, "members", "must lie in [3, 64]");
+    recipe.members = static_cast<int>(request.members());
+  }
+  recipe.training.epochs = fine_tuning ? 100 : 300;
+  if (request.epochs() != 0) {
+    Require(request.epochs() <= 100000, "epochs", "must be at most 100000");
+    recipe.training.epochs = static_cast<int>(request.epochs());
+  }
+  recipe.training.learning_rate = fine_tuning ? 1e-3 : 3e-3;
+  if (request.learning_rate() != 0) {
+    Require(std::isfinite(request.learning_rate()) && request.learning_rate() > 0 &&
+                request.learning_rate() < 1,
+            "learning_rate", "must lie in (0, 1)");
+    recipe.training.learning_rate = request.learning_rate();
+  }
+  recipe.training.seed = request.seed() == 0 ? 1 : request.seed();
+  Require(request.name().size() <= 256, "name", "must be at most 256 characters");
+  recipe.Validate("");
+  return recipe;
+}
+
+// What a stored history is: the soil, the configuration, the RVE's code, the path.
+std::string HistoryKey(const std::string& soil_parameters, const std::string& preset,
+                       const std::string& rve_version, const ann::LabPathSpec& spec) {
+  char path[256];
+  std::snprintf(path, sizeof path, "path=%s;p=%.17g;max=%.17g;steps=%d;settle=%d;walk=%.17g;seed=%llu",
+                ann::LabPathName(spec.path).c_str(), spec.pressure_pa, spec.max_strain, spec.steps,
+                spec.settle_steps, spec.walk_step_strain,
+                static_cast<unsigned long long>(spec.seed));
+  return "gonogo-rve-path-v1;soil=" + soil_parameters + ";preset=" + preset +
+         ";rve=" + rve_version + ";" + path;
+}
+
+// Runs `tasks` on the pool, at most kInFlightPerWorker per worker at a time, and hands each
+// answer to `on_answer` on the calling thread as it arrives. Stops early, cancelling what is
+// queued or running and waiting for it, when `stop` says so, the pool cancels a task (its
+// shutdown) or a task fails. Returns the first failure; else cancelled when stopped; else ok.
+TaskResult RunTrainingTasks(CurveResolver& resolver, std::vector<TaskSpec> tasks,
+                            const std::function<bool()>& stop,
+                            const std::function<void(size_t index, const TaskResult&)>& on_answer) {
+  struct Shared {
+    std::mutex mutex;
+    std::condition_variable arrived;
+    std::deque<TaskResult> results;
+  };
+  auto shared = std::make_shared<Shared>();
+  WorkerPool& pool = resolver.pool();
+  const size_t in_flight_limit =
+      kInFlightPerWorker * static_cast<size_t>(std::max(1, pool.Workers()));
+  std::map<uint64_t, size_t> outstanding;  // task id -> index
+  size_t next = 0;
+  TaskResult failure;      // the first task that failed
+  bool stopped = false;    // by `stop`, or by the pool cancelling a task (its shutdown)
+  const auto stopping = [&] { return stopped || failure.error_kind != ErrorKind::kNone; };
+  while (true) {
+    while (!stopping() && next < tasks.size() && outstanding.size() < in_flight_limit) {
+      TaskSpec& task = tasks[next];
+      task.task_id = resolver.NewTaskId();
+      outstanding[task.task_id] = next++;
+      pool.Submit(std::move(task), [shared](TaskResult result) {
+        std::lock_guard<std::mutex> lock(shared->mutex);
+        shared->results.push_back(std::move(result));
+        shared->arrived.notify_all();
+      });
+    }
+    if (outstanding.empty()) break;
+    std::deque<TaskResult> ready;
+    {
+      std::unique_lock<std::mutex> lock(shared->mutex);
+      shared->arrived.wait_for(lock, std::chrono::milliseconds(100),
+                               [&] { return !shared->results.empty(); });
+      ready.swap(shared->results);
+    }
+    for (TaskResult& result : ready) {
+      const auto found = outstanding.find(result.task_id);
+      if (found == outstanding.end()) continue;
+      const size_t index = found->second;
+      outstanding.erase(found);
+      if (result.ok) {
+        if (!stopping()) on_answer(index, result);
+      } else if (result.cancelled) {
+        stopped = true;
+      } else if (failure.error_kind == ErrorKind::kNone) {
+        failure = std::move(result);
+        if (failure.error_kind == ErrorKind::kNone) failure.error_kind = ErrorKind::kInternal;
+      }
+    }
+    if (!stopping() && stop()) stopped = true;
+    if (stopping()) {
+      for (const auto& [id, index] : outstanding) pool.Cancel(id);
+    }
+  }
+  if (failure.error_kind != ErrorKind::kNone) return failure;
+  TaskResult outcome;
+  outcome.ok = !stopped;
+  outcome.cancelled = stopped;
+  return outcome;
+}
+
+TaskSpec TrainingTask(v1::TrainingWork work, uint32_t debug_delay_ms) {
+  TaskSpec task;
+  task.debug_delay_ms = debug_delay_ms;
+  task.tier = "fe-ann";
+  task.needs.ranks = 1;
+  task.needs.threads = 1;
+  task.needs.expected_seconds = kTrainingTaskSeconds;
+  task.training = std::make_shared<const v1::TrainingWork>(std::move(work));
+  return task;
+}
+
+struct PlannedPath {
+  tiers::NamedLabPath path;
+  std::string role;
+  std::string key;
+};
+
+}  // namespace
+
+v1::Job JobManager::SubmitTraining(const std::string& id, const v1::TrainSurrogateRequest& request) {
+  if (config_.models_dir.empty()) {
+    throw PreconditionError("tier", "this server keeps no fe-ann models (no data directory)");
+  }
+  const tiers::CatalogueEntry& soil = RveSoil(request.soil_name());
+  Require(request.from_model().size() <= 64, "from_model", "must be at most 64 characters");
+  const bool fine_tuning = !request.from_model().empty();
+  RecipeOf(request, fine_tuning);
+  if (fine_tuning) {
+    const auto base =
+        tiers::SurrogateRegistry(config_.models_dir).Describe(request.from_model());
+    Require(base.has_value(), "from_model",
+            "no model '" + request.from_model() + "' (`gonogo models` lists them)");
+    Require(base->fe_de_preset == config_.fe_de_preset, "from_model",
+            "model '" + base->id + "' was trained on RVEs of the " + base->fe_de_preset +
+                " configuration; this server runs " + config_.fe_de_preset);
+  }
+  cache::JobRecord rec;
+  rec.id = id;
+  rec.kind = cache::kTrainJob;
+  rec.name = request.name().empty() ? "surrogate training: " + soil.soil : request.name();
+  rec.tier = "fe-ann";
+  rec.request = request.SerializeAsString();
+  return Enqueue(std::move(rec), nullptr);
+}
+
+void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<Live>& live) {
+  const std::string id = rec.id;
+  v1::JobStatus status = StatusOf(rec);
+  auto report = [&](double fraction, const std::string& message, bool persist) {
+    status.set_fraction_done(fraction);
+    ReportProgress(id, status, message, persist);
+  };
+  const auto stop = [&] {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stopping_ || live->cancel_requested.load();
+  };
+  // A stopped job: cancelled, or back to QUEUED for the next start when the server drains.
+  const auto end_stopped = [&] {
+    if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
+    jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
+    spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
+  };
+  const auto end_failed = [&](const TaskResult& failure, const std::string& what) {
+    Finish(id, cache::JobState::kFailed,
+           std::string(ErrorKindName(failure.error_kind)) + ": " + what + ": " + failure.error, "",
+           {});
+  };
+  try {
+    jobs_.SetState(id, cache::JobState::kRunning, "planning the strain paths");
+    v1::TrainSurrogateRequest request;
+    Require(request.ParseFromString(rec.request), "request", "stored request is unreadable");
+    const bool fine_tuning = !request.from_model().empty();
+    const tiers::SurrogateRecipe recipe = RecipeOf(request, fine_tuning);
+    const tiers::CatalogueEntry& soil = RveSoil(request.soil_name());
+    const std::string soil_text = CanonicalText(soil.parameters);
+    const std::string& preset = config_.fe_de_preset;
+    const std::string rve_version = tiers_.Get("fe-de").Version();
+    const std::string dataset = cache::DatasetId(soil.soil, preset, soil_text);
+    const tiers::SurrogateRegistry registry(config_.models_dir);
+    std::optional<tiers::RegisteredSurrogate> base;
+    if (fine_tuning) {
+      base = registry.Describe(request.from_model());
+      Require(base.has_value(), "from_model", "model '" + request.from_model() + "' is gone");
+    }
+
+    // 1. The strain paths: the stored ones from the dataset, the others on the pool.
+    std::vector<PlannedPath> planned;
+    for (tiers::NamedLabPath& path : tiers::TrainingPaths(recipe)) {
+      planned.push_back({std::move(path), cache::kTrainingRole, ""});
+    }
+    for (tiers::NamedLabPath& path : tiers::HeldOutPaths(recipe)) {
+      planned.push_back({std::move(path), cache::kHeldOutRole, ""});
+    }
+    cache::DatasetStore store(db_);
+    std::vector<TaskSpec> path_tasks;
+    std::vector<size_t> task_path;  // the planned path of each task
+    for (size_t k = 0; k < planned.size(); ++k) {
+      planned[k].key = HistoryKey(soil_text, preset, rve_version, planned[k].path.spec);
+      if (store.Find(planned[k].key)) continue;
+      v1::TrainingWork work;
+      *work.mutable_rve_path() = ToProto(planned[k].path.spec);
+      work.mutable_rve_path()->set_soil_parameters(soil_text);
+      work.mutable_rve_path()->set_fe_de_preset(preset);
+      path_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
+      task_path.push_back(k);
+    }
+    const int total_tasks = static_cast<int>(planned.size()) + recipe.members;
+    const int stored = static_cast<int>(planned.size() - path_tasks.size());
+    int done = stored;
+    status.set_tasks_total(static_cast<uint32_t>(total_tasks));
+    status.set_tasks_done(static_cast<uint32_t>(done));
+    status.set_cache_hits(static_cast<uint32_t>(stored));
+    const auto paths_message = [&] {
+      return "RVE strain paths: " + std::to_string(done) + " of " +
+             std::to_string(planned.size()) + " (" + std::to_string(stored) +
+             " from dataset " + dataset + ")";
+    };
+    // The paths are most of a training's time: 80 % of the bar.
+    report(0.8 * done / planned.size(), paths_message(), true);
+    const auto generation_start = std::chrono::steady_clock::now();
+    const TaskResult paths_outcome = RunTrainingTasks(
+        resolver_, std::move(path_tasks), stop, [&](size_t index, const TaskResult& result) {
+          const PlannedPath& path = planned[task_path[index]];
+          const ann::StrainHistory history = ann::ParseHistory(result.training_output);
+          cache::StoredHistory row;
+          row.history_key = path.key;
+          row.dataset = dataset;
+          row.soil_name = soil.soil;
+          row.soil_parameters = soil_text;
+          row.fe_de_preset = preset;
+          row.rve_version = rve_version;
+          row.path_kind = ann::LabPathName(path.path.spec.path);
+          row.path_name = path.path.name;
+          row.role = path.role;
+          row.seed = static_cast<int64_t>(path.path.spec.seed);
+          row.steps = static_cast<int64_t>(history.steps());
+          row.history = result.training_output;
+          row.code_version = GONOGO_VERSION;
+          row.computed_by = result.computed_by;
+          row.compute_seconds = result.compute_seconds;
+          row.created_unix_ms = NowUnixMs();
+          store.Put(row);
+          ++done;
+          status.set_tasks_done(static_cast<uint32_t>(done));
+          report(0.8 * done / planned.size(), paths_message(), true);
+        });
+    if (paths_outcome.cancelled) return end_stopped();
+    if (!paths_outcome.ok) return end_failed(paths_outcome, "an RVE strain path");
+    const double generation_seconds = Seconds(generation_start);
+
+    std::vector<ann::StrainHistory> training, held_out;
+    std::vector<std::string> held_out_names;
+    v1::TrainMemberWork member_work;
+    for (const PlannedPath& path : planned) {
+      const std::optional<cache::StoredHistory> row = store.Find(path.key);
+      Require(row.has_value(), "dataset", "history of '" + path.path.name + "' is missing");
+      if (path.role == cache::kTrainingRole) {
+        training.push_back(ann::ParseHistory(row->history));
+        member_work.add_histories(row->history);
+      } else {
+        held_out.push_back(ann::ParseHistory(row->history));
+        held_out_names.push_back(path.path.name);
+      }
+    }
+
+    // 2. The members, one task each.
+    const int members = fine_tuning ? base->members : recipe.members;
+    member_work.set_epochs(recipe.training.epochs);
+    member_work.set_batch_size(recipe.training.batch_size);
+    member_work.set_learning_rate(recipe.training.learning_rate);
+    member_work.set_anchored(recipe.architecture.anchored);
+    for (int width : recipe.architecture.hidden_widths) member_work.add_hidden_widths(width);
+    std::vector<TaskSpec> member_tasks;
+    for (int k = 0; k < members; ++k) {
+      v1::TrainingWork work;
+      *work.mutable_train_member() = member_work;
+      work.mutable_train_member()->set_seed(recipe.training.seed + static_cast<uint64_t>(k));
+      if (fine_tuning) {
+        work.mutable_train_member()->set_base_member_path(
+            (fs::path(base->directory) / ("member_" + std::to_string(k) + ".pt")).string());
+      }
+      member_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
+    }
+    member_work.Clear();
+    std::vector<std::string> member_bytes(static_cast<size_t>(members));
+    int members_done = 0;
+    const auto members_message = [&] {
+      return "training the ensemble: " + std::to_string(members_done) + " of " +
+             std::to_string(members) + " members (" + std::to_string(training.size()) +
+             " training paths)";
+    };
+    report(0.8, members_message(), true);
+    const auto training_start = std::chrono::steady_clock::now();
+    const TaskResult members_outcome = RunTrainingTasks(
+        resolver_, std::move(member_tasks), stop, [&](size_t index, const TaskResult& result) {
+          member_bytes[index] = result.training_output;
+          ++members_done;
+          status.set_tasks_done(static_cast<uint32_t>(++done));
+          report(0.8 + 0.18 * members_done / members, members_message(), true);
+        });
+    if (members_outcome.cancelled) return end_stopped();
+    if (!members_outcome.ok) return end_failed(members_outcome, "an ensemble member");
+    const double training_seconds = Seconds(training_start);
+
+    // 3. Assembled, measured on the held-out paths, registered.
+    report(0.98, "measuring the held-out paths and registering the model", true);
+    std::vector<ann::StressSurrogate> surrogates;
+    for (const std::string& bytes : member_bytes) {
+      surrogates.push_back(ann::StressSurrogate::FromBytes(bytes));
+    }
+    const ann::SurrogateEnsemble ensemble =
+        ann::SurrogateEnsemble::Assemble(std::move(surrogates), training);
+    tiers::RegisteredSurrogate record;
+    record.soil_name = soil.soil;
+    record.soil_parameters = soil_text;
+    record.fe_de_preset = preset;
+    record.architecture = ensemble.member(0).architecture();
+    record.id = registry.NewId(soil.soil, record.architecture);
+    record.members = static_cast<int>(ensemble.size());
+    record.data_hash = tiers::HistoriesHash(training);
+    for (const ann::StrainHistory& history : training) {
+      record.samples += static_cast<int64_t>(history.steps());
+    }
+    record.distance_threshold = ensemble.distance_threshold();
+    record.spread_threshold = ensemble.spread_threshold();
+    for (size_t k = 0; k < held_out.size(); ++k) {
+      const double error = ann::ReplayError(ensemble, held_out[k]);
+      record.held_out.push_back({held_out_names[k], error});
+      record.worst_held_out_error = std::max(record.worst_held_out_error, error);
+    }
+    record.training_seconds = training_seconds;
+    record.from_model = request.from_model();
+    record.code_version = GONOGO_VERSION;
+    record.created_unix_ms = NowUnixMs();
+    const tiers::RegisteredSurrogate registered = registry.Register(record, ensemble);
+
+    std::string json;
+    google::protobuf::util::JsonPrintOptions json_options;
+    json_options.add_whitespace = true;
+    json_options.preserve_proto_field_names = true;
+    google::protobuf::util::MessageToJsonString(ToProto(registered), &json, json_options);
+    const fs::path out_dir = fs::path(JobDir(id)) / "out";
+    fs::create_directories(out_dir);
+    std::ofstream(out_dir / "model.json") << json << "\n";
+    jobs_.SetProgress(id, {1.0, done, total_tasks, stored, 0, "done"});
+    spdlog::info("job {}: model {} registered ({} paths in {:.1f} s, {} from the dataset; {} "
+                 "members in {:.1f} s; worst held-out error {:.2f} %)",
+                 id, registered.id, planned.size(), generation_seconds, stored, members,
+                 training_seconds, 100 * registered.worst_held_out_error);
+    char message[160];
+    std::snprintf(message, sizeof message, "done: model %s, worst held-out error %.2f %%",
+                  registered.id.c_str(), 100 * registered.worst_held_out_error);
+    Finish(id, cache::JobState::kDone, message, json, {"model.json"});
+  } catch (const std::exception& e) {
+    Finish(id, cache::JobState::kFailed, e.what(), "", {});
+  }
+}
+
+}  // namespace gonogo::server

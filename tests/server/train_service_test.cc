@@ -1,0 +1,248 @@
+// Training the fe-ann tier's surrogates as jobs on the pool, through the whole service:
+// `mpirun -np 3 gonogo-server --fe-de-preset tiny` (rank 0 serving, ranks 1 and 2 computing),
+// driven by `gonogo train | models | dataset` and the API.
+//   - A training job runs its RVE strain paths on both worker ranks, stores them as a dataset and
+//     trains its members on the pool; the model it registers is the one `gonogo-ann --register`
+//     makes in-process from the same recipe (same data hash, same held-out errors to the digit),
+//     and an fe-ann curve runs with it.
+//   - A second training on the same soil takes every path from the dataset (none recomputed).
+//   - The dataset lists and exports (CSV and .npy, with an index naming the rank of each path).
+//   - Bad requests are refused by field; a cancelled training stops and registers nothing; a
+//     training interrupted by a drain resumes at the next start from the paths it had stored.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <regex>
+#include <thread>
+
+#include "server_process.h"
+
+namespace gonogo::testing {
+namespace {
+
+const char kRecipe[] = "--soil seed000_sand_rve100 --steps 20 --walks 4 --epochs 60";
+
+// The text after `label` on the line of `out` that holds `label`, after `from`.
+std::string LineAfter(const std::string& out, const std::string& label, size_t from = 0) {
+  const size_t at = out.find(label, from);
+  if (at == std::string::npos) return "";
+  const size_t end = out.find('\n', at);
+  return out.substr(at + label.size(), end == std::string::npos ? std::string::npos : end - at - label.size());
+}
+
+// A model's block in `gonogo models` output.
+std::string ModelBlock(const std::string& listing, const std::string& id) {
+  const size_t at = listing.find(id + "\n");
+  if (at == std::string::npos) return "";
+  const size_t end = listing.find("made by:", at);
+  return listing.substr(at + id.size(), end - at - id.size());
+}
+
+std::string RegisteredId(const std::string& out) {
+  std::smatch match;
+  if (!std::regex_search(out, match, std::regex("registered (seed000_sand_rve100-[^ \n]+)"))) {
+    return "";
+  }
+  return match[1];
+}
+
+size_t CountLines(const std::string& text) {
+  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+v1::Job GetJob(v1::MobilityService::Stub& stub, const std::string& id) {
+  grpc::ClientContext ctx;
+  v1::GetJobRequest request;
+  request.set_job_id(id);
+  v1::Job job;
+  EXPECT_TRUE(stub.GetJob(&ctx, request, &job).ok());
+  return job;
+}
+
+// Polls the job until it has done at least `tasks` tasks (or 60 s pass).
+v1::Job WaitForTasks(v1::MobilityService::Stub& stub, const std::string& id, uint32_t tasks) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  v1::Job job = GetJob(stub, id);
+  while (job.status().tasks_done() < tasks && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    job = GetJob(stub, id);
+  }
+  return job;
+}
+
+std::string SubmittedJobId(const CliRun& run) {
+  std::smatch match;
+  if (!std::regex_search(run.out, match, std::regex("training job (job-[0-9a-f]+) submitted"))) {
+    return "";
+  }
+  return match[1];
+}
+
+TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
+  ScratchDir dir("train-service");
+  const fs::path data = dir.path() / "data";
+  fs::create_directories(data);
+  ServerProcess server(data, {"--fe-de-preset", "tiny"}, 3);
+
+  const CliRun no_data = Gonogo(server.endpoint(), "dataset");
+  ASSERT_EQ(no_data.exit_code, 0) << no_data.out;
+  EXPECT_NE(no_data.out.find("no datasets"), std::string::npos) << no_data.out;
+
+  const CliRun first =
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16");
+  ASSERT_EQ(first.exit_code, 0) << first.out;
+  const std::string trained = RegisteredId(first.out);
+  ASSERT_FALSE(trained.empty()) << first.out;
+  EXPECT_NE(first.out.find("RVE strain paths: 0 of 24 (0 from dataset"), std::string::npos)
+      << first.out;
+  EXPECT_NE(first.out.find("mlp-16x16-tanh-anchored, 3 members"), std::string::npos) << first.out;
+
+  // The same data again, another network: every path from the dataset.
+  const CliRun second =
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --unanchored");
+  ASSERT_EQ(second.exit_code, 0) << second.out;
+  EXPECT_NE(second.out.find("RVE strain paths: 24 of 24 (24 from dataset"), std::string::npos)
+      << second.out;
+  EXPECT_NE(second.out.find("mlp-16x16-tanh, 3 members"), std::string::npos) << second.out;
+
+  // The offline trainer on the same recipe, registering into the same data directory.
+  const fs::path offline_out = dir.path() / "gonogo-ann.out";
+  const std::string offline_command =
+      "OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann " + kRecipe +
+      " --preset tiny --architecture 16x16 --threads 2 --register " + data.string() + " > " +
+      offline_out.string() + " 2>&1";
+  ASSERT_EQ(std::system(offline_command.c_str()), 0) << ReadFile(offline_out);
+  std::smatch match;
+  const std::string offline_text = ReadFile(offline_out);
+  ASSERT_TRUE(std::regex_search(offline_text, match,
+                                std::regex("registered model (seed000_sand_rve100-[^ ]+)")))
+      << offline_text;
+  const std::string offline = match[1];
+  const CliRun models = Gonogo(server.endpoint(), "models --soil seed000_sand_rve100");
+  ASSERT_EQ(models.exit_code, 0) << models.out;
+  const std::string pool_block = ModelBlock(models.out, trained);
+  const std::string offline_block = ModelBlock(models.out, offline);
+  ASSERT_FALSE(pool_block.empty()) << models.out;
+  ASSERT_FALSE(offline_block.empty()) << models.out;
+  const std::string pool_hash = LineAfter(pool_block, "hash ");
+  EXPECT_EQ(pool_hash.substr(0, 16), LineAfter(offline_block, "hash ").substr(0, 16))
+      << "the same training data, path for path:\n" << models.out;
+  EXPECT_EQ(LineAfter(pool_block, "held out:"), LineAfter(offline_block, "held out:"))
+      << "the same members, trained on other ranks:\n" << models.out;
+  EXPECT_EQ(LineAfter(pool_block, "envelope:"), LineAfter(offline_block, "envelope:"))
+      << models.out;
+
+  // The dataset: listed, exported as CSV and .npy, each path's rank in the index.
+  const CliRun listed = Gonogo(server.endpoint(), "dataset --soil seed000_sand_rve100");
+  ASSERT_EQ(listed.exit_code, 0) << listed.out;
+  ASSERT_TRUE(std::regex_search(listed.out, match, std::regex("(seed000_sand_rve100-tiny-[0-9a-f]{8})")))
+      << listed.out;
+  const std::string dataset = match[1];
+  ASSERT_TRUE(std::regex_search(
+      listed.out, match, std::regex("histories: 24 \\(20 training, 4 held out\\), ([0-9]+) steps")))
+      << listed.out;
+  const size_t steps = std::stoul(match[1]);
+  EXPECT_NE(listed.out.find("(fe-de-1-tiny)"), std::string::npos) << listed.out;
+  const fs::path exported = dir.path() / "export";
+  const CliRun csv = Gonogo(server.endpoint(),
+                            "dataset export " + dataset + " --out " + exported.string());
+  ASSERT_EQ(csv.exit_code, 0) << csv.out;
+  const std::string table = ReadFile(exported / (dataset + ".csv"));
+  EXPECT_EQ(CountLines(table), steps + 1) << "a header and one row per step";
+  EXPECT_EQ(table.rfind("history,step,dH_xx,", 0), 0u) << table.substr(0, 200);
+  const std::string index = ReadFile(exported / (dataset + ".paths.csv"));
+  EXPECT_EQ(CountLines(index), 25u) << index;
+  EXPECT_NE(index.find(",rank 1,"), std::string::npos) << "paths ran on both workers:\n" << index;
+  EXPECT_NE(index.find(",rank 2,"), std::string::npos) << "paths ran on both workers:\n" << index;
+  const CliRun npy = Gonogo(server.endpoint(), "dataset export " + dataset + " --format npy --role "
+                                               "held-out --out " + exported.string());
+  ASSERT_EQ(npy.exit_code, 0) << npy.out;
+  const std::string array = ReadFile(exported / (dataset + "-held-out.npy"));
+  EXPECT_EQ(array.rfind("\x93NUMPY", 0), 0u);
+  EXPECT_NE(array.find("'shape': ("), std::string::npos);
+  EXPECT_EQ(CountLines(ReadFile(exported / (dataset + "-held-out.paths.csv"))), 5u);
+  EXPECT_EQ(CountLines(ReadFile(exported / (dataset + "-held-out.npy.columns.txt"))), 17u);
+
+  // The pool's model computes an fe-ann curve.
+  const CliRun curve = Gonogo(
+      server.endpoint(),
+      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + trained);
+  ASSERT_EQ(curve.exit_code, 0) << curve.out;
+  EXPECT_NE(curve.out.find("surrogate model " + trained), std::string::npos) << curve.out;
+
+  // Refused by field, before anything runs.
+  const std::vector<std::pair<std::string, std::string>> refusals = {
+      {"train --soil no-such-soil", "soil_name: no dem-hertz-mindlin soil 'no-such-soil'"},
+      {"train --soil lll_dry_sand", "soil_name: no dem-hertz-mindlin soil 'lll_dry_sand'"},
+      {"train --soil seed000_sand_rve100 --from no-such", "from_model: no model 'no-such'"},
+      {"train --soil seed000_sand_rve100 --from " + trained + " --hidden 8x8",
+       "hidden_widths: a fine-tuned model keeps its base model's layers"},
+      {"train --soil seed000_sand_rve100 --pressures-kpa 5 2", "pressures_kpa: must be in"},
+      {"train --soil seed000_sand_rve100 --members 2", "members: must lie in [3, 64]"},
+      {"dataset export no-such --out " + exported.string(), "NOT_FOUND: dataset_id"},
+  };
+  for (const auto& [args, message] : refusals) {
+    const CliRun refused = Gonogo(server.endpoint(), args);
+    EXPECT_EQ(refused.exit_code, 3) << args << ": " << refused.out;
+    EXPECT_NE(refused.out.find(message), std::string::npos) << args << ": " << refused.out;
+  }
+  const CliRun bad_format = Gonogo(server.endpoint(), "dataset export " + dataset +
+                                                          " --format xls --out " + exported.string());
+  EXPECT_EQ(bad_format.exit_code, 2) << bad_format.out;
+  EXPECT_EQ(server.Terminate(), 0);
+}
+
+TEST(TrainService, ACancelledTrainingStopsAndADrainedOneResumesFromItsStoredPaths) {
+  ScratchDir dir("train-service-resume");
+  const fs::path data = dir.path() / "data";
+  fs::create_directories(data);
+  std::string drained;
+  uint32_t stored_before_drain = 0;
+  {
+    // Every task waits 400 ms first, so that the jobs are caught mid-way.
+    ServerProcess server(data, {"--fe-de-preset", "tiny", "--task-delay-ms", "400"}, 3);
+    auto stub = server.Stub();
+
+    const CliRun cancelled_run = Gonogo(
+        server.endpoint(), "train --soil seed000_sand_rve100 --steps 21 --walks 4 --epochs 60 --hidden 8 --no-wait");
+    ASSERT_EQ(cancelled_run.exit_code, 0) << cancelled_run.out;
+    const std::string cancelled = SubmittedJobId(cancelled_run);
+    ASSERT_FALSE(cancelled.empty()) << cancelled_run.out;
+    EXPECT_GE(WaitForTasks(*stub, cancelled, 2).status().tasks_done(), 2u);
+    const auto cancel_start = std::chrono::steady_clock::now();
+    const CliRun cancel = Gonogo(server.endpoint(), "cancel " + cancelled);
+    ASSERT_EQ(cancel.exit_code, 0) << cancel.out;
+    const v1::JobStatus end = WaitForEnd(*stub, cancelled);
+    EXPECT_EQ(end.state(), v1::JOB_STATE_CANCELLED) << end.message();
+    EXPECT_LT(std::chrono::steady_clock::now() - cancel_start, std::chrono::seconds(10));
+    const CliRun none = Gonogo(server.endpoint(), "models");
+    EXPECT_NE(none.out.find("no surrogate models"), std::string::npos) << none.out;
+
+    const CliRun drained_run =
+        Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 8 --no-wait");
+    ASSERT_EQ(drained_run.exit_code, 0) << drained_run.out;
+    drained = SubmittedJobId(drained_run);
+    ASSERT_FALSE(drained.empty()) << drained_run.out;
+    EXPECT_GE(WaitForTasks(*stub, drained, 4).status().tasks_done(), 4u);
+    EXPECT_EQ(server.Terminate(), 0);
+  }
+  {
+    // What the drain left: the job queued again, its finished paths in the dataset.
+    ServerProcess restarted(data, {"--fe-de-preset", "tiny"}, 3);
+    auto stub = restarted.Stub();
+    const v1::JobStatus resumed = WaitForEnd(*stub, drained);
+    EXPECT_EQ(resumed.state(), v1::JOB_STATE_DONE) << resumed.message();
+    stored_before_drain = resumed.cache_hits();
+    EXPECT_GE(stored_before_drain, 4u) << "paths stored before the drain are not run again";
+    EXPECT_LT(stored_before_drain, 24u) << "the drain came mid-way";
+    const CliRun models = Gonogo(restarted.endpoint(), "models");
+    EXPECT_NE(models.out.find("mlp-8-tanh-anchored, 3 members"), std::string::npos) << models.out;
+    EXPECT_EQ(restarted.Terminate(), 0);
+  }
+}
+
+}  // namespace
+}  // namespace gonogo::testing
