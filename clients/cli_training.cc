@@ -1,7 +1,8 @@
 // gonogo models | train | dataset: the fe-ann tier's surrogate models and the RVE histories they
 // are trained on.
 //   gonogo models [--soil NAME]
-//   gonogo train --soil NAME [--hidden 64x64] [--from MODEL] [--epochs N] ... [--no-wait]
+//   gonogo train --soil NAME [--hidden 64x64] [--from MODEL] [--epochs N] [--rig-load-n N] ...
+//                [--no-wait]
 //   gonogo dataset [--soil NAME]
 //   gonogo dataset export DATASET --out DIR [--format csv|npy] [--role training|held-out]
 #include <iomanip>
@@ -208,6 +209,24 @@ Command AddTrainCommand(CLI::App& parent) {
       ->type_name("KPA ...");
   train->add_option_function<uint64_t>(
            "--seed", [&r](uint64_t v) { r.set_seed(v); }, "first member's seed [default: 1]")
+      ->type_name("N");
+  train->add_option_function<double>(
+           "--rig-load-n", [&r](double v) { r.set_rig_load_n(v); },
+           "also train on the paths the points of an fe-de rig run take at this wheel load, N "
+           "(seed 000's step 2)")
+      ->type_name("N");
+  train->add_option_function<double>(
+           "--rig-diameter-m", [&r](double v) { r.set_rig_diameter_m(v); },
+           "the rig wheel's diameter, m [default: 0.5]")
+      ->type_name("M");
+  train->add_option_function<double>(
+           "--rig-width-m", [&r](double v) { r.set_rig_width_m(v); },
+           "the rig wheel's width, m [default: 0.2]")
+      ->type_name("M");
+  train->add_option_function<uint32_t>(
+           "--rig-points", [&r](uint32_t v) { r.set_rig_points(v); },
+           "recorded paths added to the training set, evenly spread over the bin; half as many "
+           "more are held out [default: 8]")
       ->type_name("N");
   train->add_option_function<std::string>(
            "--name", [&r](const std::string& v) { r.set_name(v); }, "shown in job lists")

@@ -119,6 +119,41 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   return recipe;
 }
 
+// Seed 000's step 2 in a request: the rig run whose points' paths join the data.
+struct RigRecipe {
+  double load_n = 0;  // 0: none
+  double diameter_m = 0.5;
+  double width_m = 0.2;
+  int training_points = 8;
+  int held_out_points = 4;
+};
+
+RigRecipe RigRecipeOf(const v1::TrainSurrogateRequest& request) {
+  RigRecipe rig;
+  Require(std::isfinite(request.rig_load_n()) && request.rig_load_n() >= 0 &&
+              request.rig_load_n() <= 1e6,
+          "rig_load_n", "must be a wheel load in [0, 1e6] N (0: no rig paths)");
+  if (request.rig_load_n() == 0) {
+    Require(request.rig_diameter_m() == 0 && request.rig_width_m() == 0 &&
+                request.rig_points() == 0,
+            "rig_load_n", "is needed with a rig wheel or rig points (0: no rig paths)");
+    return rig;
+  }
+  rig.load_n = request.rig_load_n();
+  if (request.rig_diameter_m() != 0) rig.diameter_m = request.rig_diameter_m();
+  if (request.rig_width_m() != 0) rig.width_m = request.rig_width_m();
+  Require(std::isfinite(rig.diameter_m) && rig.diameter_m > 0 && rig.diameter_m <= 5,
+          "rig_diameter_m", "must lie in (0, 5] m");
+  Require(std::isfinite(rig.width_m) && rig.width_m > 0 && rig.width_m <= rig.diameter_m,
+          "rig_width_m", "must lie in (0, rig_diameter_m] m");
+  if (request.rig_points() != 0) {
+    Require(request.rig_points() <= 1024, "rig_points", "must be at most 1024");
+    rig.training_points = static_cast<int>(request.rig_points());
+  }
+  rig.held_out_points = std::max(1, rig.training_points / 2);
+  return rig;
+}
+
 // What a stored history is: the soil, the configuration, the RVE's code, the path.
 std::string HistoryKey(const std::string& soil_parameters, const std::string& preset,
                        const std::string& rve_version, const ann::LabPathSpec& spec) {
@@ -214,6 +249,25 @@ struct PlannedPath {
   std::string key;
 };
 
+// The k-th kept path of a rig run (training or held out), by what the run and the choice were.
+std::string RigPathKey(const std::string& soil_parameters, const std::string& preset,
+                       const std::string& rve_version, const RigRecipe& rig,
+                       const std::string& role, int k) {
+  char text[256];
+  std::snprintf(text, sizeof text, "load=%.17g;d=%.17g;b=%.17g;kept=%d+%d;%s=%d", rig.load_n,
+                rig.diameter_m, rig.width_m, rig.training_points, rig.held_out_points,
+                role.c_str(), k);
+  return "gonogo-rig-path-v1;soil=" + soil_parameters + ";preset=" + preset +
+         ";rve=" + rve_version + ";" + text;
+}
+
+// "rig 1000 N point 3": kept path k (from 0) of a rig run.
+std::string RigPathName(const RigRecipe& rig, int k) {
+  char text[64];
+  std::snprintf(text, sizeof text, "rig %g N point %d", rig.load_n, k + 1);
+  return text;
+}
+
 }  // namespace
 
 v1::Job JobManager::SubmitTraining(const std::string& id, const v1::TrainSurrogateRequest& request) {
@@ -224,6 +278,7 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const v1::TrainSurroga
   Require(request.from_model().size() <= 64, "from_model", "must be at most 64 characters");
   const bool fine_tuning = !request.from_model().empty();
   RecipeOf(request, fine_tuning);
+  RigRecipeOf(request);
   if (fine_tuning) {
     const auto base =
         tiers::SurrogateRegistry(config_.models_dir).Describe(request.from_model());
@@ -290,12 +345,41 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     for (tiers::NamedLabPath& path : tiers::HeldOutPaths(recipe)) {
       planned.push_back({std::move(path), cache::kHeldOutRole, ""});
     }
+    // Seed 000's step 2: the kept paths of an fe-de rig run's points, after the lab paths.
+    const RigRecipe rig = RigRecipeOf(request);
+    std::vector<size_t> rig_paths;  // their places in `planned`
+    if (rig.load_n > 0) {
+      for (const auto& [role, count] : {std::make_pair(std::string(cache::kTrainingRole),
+                                                       rig.training_points),
+                                        std::make_pair(std::string(cache::kHeldOutRole),
+                                                       rig.held_out_points)}) {
+        for (int k = 0; k < count; ++k) {
+          PlannedPath path;
+          path.path.name = role == cache::kTrainingRole ? RigPathName(rig, k)
+                                                        : "rig point " + std::to_string(k + 1);
+          path.role = role;
+          path.key = RigPathKey(soil_text, preset, rve_version, rig, role, k);
+          rig_paths.push_back(planned.size());
+          planned.push_back(std::move(path));
+        }
+      }
+    }
     cache::DatasetStore store(db_);
     std::vector<TaskSpec> path_tasks;
-    std::vector<size_t> task_path;  // the planned path of each task
+    std::vector<size_t> task_path;  // the planned path of each task (planned.size(): the rig run)
+    int stored = 0;
+    bool rig_missing = false;
     for (size_t k = 0; k < planned.size(); ++k) {
-      planned[k].key = HistoryKey(soil_text, preset, rve_version, planned[k].path.spec);
-      if (store.Find(planned[k].key)) continue;
+      const bool on_rig = k >= planned.size() - rig_paths.size();
+      if (!on_rig) planned[k].key = HistoryKey(soil_text, preset, rve_version, planned[k].path.spec);
+      if (store.Find(planned[k].key)) {
+        ++stored;
+        continue;
+      }
+      if (on_rig) {
+        rig_missing = true;
+        continue;
+      }
       v1::TrainingWork work;
       *work.mutable_rve_path() = ToProto(planned[k].path.spec);
       work.mutable_rve_path()->set_soil_parameters(soil_text);
@@ -303,48 +387,94 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       path_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
       task_path.push_back(k);
     }
+    if (rig_missing) {  // one run makes every kept path of it
+      v1::TrainingWork work;
+      v1::RigPathsWork* run = work.mutable_rig_paths();
+      run->set_soil_parameters(soil_text);
+      run->set_fe_de_preset(preset);
+      run->set_wheel_load_n(rig.load_n);
+      run->set_diameter_m(rig.diameter_m);
+      run->set_width_m(rig.width_m);
+      run->set_training_points(rig.training_points);
+      run->set_held_out_points(rig.held_out_points);
+      // First in the queue: it is the longest task of the job.
+      path_tasks.insert(path_tasks.begin(), TrainingTask(std::move(work), config_.task_delay_ms));
+      task_path.insert(task_path.begin(), planned.size());
+    }
     const int total_tasks = static_cast<int>(planned.size()) + recipe.members;
-    const int stored = static_cast<int>(planned.size() - path_tasks.size());
     int done = stored;
     status.set_tasks_total(static_cast<uint32_t>(total_tasks));
     status.set_tasks_done(static_cast<uint32_t>(done));
     status.set_cache_hits(static_cast<uint32_t>(stored));
     const auto paths_message = [&] {
-      return "RVE strain paths: " + std::to_string(done) + " of " +
-             std::to_string(planned.size()) + " (" + std::to_string(stored) +
-             " from dataset " + dataset + ")";
+      return std::string(rig.load_n > 0 ? "RVE strain paths and rig paths: " : "RVE strain paths: ") +
+             std::to_string(done) + " of " + std::to_string(planned.size()) + " (" +
+             std::to_string(stored) + " from dataset " + dataset + ")";
     };
     // The paths are most of a training's time: 80 % of the bar.
     report(0.8 * done / planned.size(), paths_message(), true);
+    // Stores one history as it arrives (the first copy of a key stays).
+    const auto keep = [&](const PlannedPath& path, const std::string& bytes, const std::string& kind,
+                          int64_t seed, const TaskResult& result) {
+      const ann::StrainHistory history = ann::ParseHistory(bytes);
+      cache::StoredHistory row;
+      row.history_key = path.key;
+      row.dataset = dataset;
+      row.soil_name = soil.soil;
+      row.soil_parameters = soil_text;
+      row.fe_de_preset = preset;
+      row.rve_version = rve_version;
+      row.path_kind = kind;
+      row.path_name = path.path.name;
+      row.role = path.role;
+      row.seed = seed;
+      row.steps = static_cast<int64_t>(history.steps());
+      row.history = bytes;
+      row.code_version = GONOGO_VERSION;
+      row.computed_by = result.computed_by;
+      row.compute_seconds = result.compute_seconds;
+      row.created_unix_ms = NowUnixMs();
+      if (!store.Find(row.history_key)) {
+        store.Put(row);
+        ++done;
+      }
+    };
     const auto generation_start = std::chrono::steady_clock::now();
     const TaskResult paths_outcome = RunTrainingTasks(
         resolver_, std::move(path_tasks), stop, [&](size_t index, const TaskResult& result) {
-          const PlannedPath& path = planned[task_path[index]];
-          const ann::StrainHistory history = ann::ParseHistory(result.training_output);
-          cache::StoredHistory row;
-          row.history_key = path.key;
-          row.dataset = dataset;
-          row.soil_name = soil.soil;
-          row.soil_parameters = soil_text;
-          row.fe_de_preset = preset;
-          row.rve_version = rve_version;
-          row.path_kind = ann::LabPathName(path.path.spec.path);
-          row.path_name = path.path.name;
-          row.role = path.role;
-          row.seed = static_cast<int64_t>(path.path.spec.seed);
-          row.steps = static_cast<int64_t>(history.steps());
-          row.history = result.training_output;
-          row.code_version = GONOGO_VERSION;
-          row.computed_by = result.computed_by;
-          row.compute_seconds = result.compute_seconds;
-          row.created_unix_ms = NowUnixMs();
-          store.Put(row);
-          ++done;
+          if (task_path[index] == planned.size()) {
+            v1::RigPathsOutput output;
+            Require(output.ParseFromString(result.training_output), "training.rig_paths",
+                    "the rig run's answer is unreadable");
+            Require(output.training_size() == rig.training_points &&
+                        output.held_out_size() == rig.held_out_points,
+                    "training.rig_paths", "the rig run kept another number of paths");
+            const double seconds_each =
+                result.compute_seconds / (rig.training_points + rig.held_out_points);
+            TaskResult each = result;
+            each.compute_seconds = seconds_each;
+            for (size_t r = 0; r < rig_paths.size(); ++r) {
+              const int k = static_cast<int>(r) < rig.training_points
+                                ? static_cast<int>(r)
+                                : static_cast<int>(r) - rig.training_points;
+              const std::string& bytes = static_cast<int>(r) < rig.training_points
+                                             ? output.training(k)
+                                             : output.held_out(k);
+              keep(planned[rig_paths[r]], bytes, "rig-point", 0, each);
+            }
+            spdlog::info("job {}: rig run at {} N ({} elements, {} FE steps) in {:.1f} s on {}",
+                         id, rig.load_n, output.elements(), output.fe_steps(),
+                         result.compute_seconds, result.computed_by);
+          } else {
+            const PlannedPath& path = planned[task_path[index]];
+            keep(path, result.training_output, ann::LabPathName(path.path.spec.path),
+                 static_cast<int64_t>(path.path.spec.seed), result);
+          }
           status.set_tasks_done(static_cast<uint32_t>(done));
           report(0.8 * done / planned.size(), paths_message(), true);
         });
     if (paths_outcome.cancelled) return end_stopped();
-    if (!paths_outcome.ok) return end_failed(paths_outcome, "an RVE strain path");
+    if (!paths_outcome.ok) return end_failed(paths_outcome, "an RVE strain path or the rig run");
     const double generation_seconds = Seconds(generation_start);
 
     std::vector<ann::StrainHistory> training, held_out;

@@ -1,5 +1,7 @@
 #include "server/training_work.h"
 
+#include <algorithm>
+
 #include "solvers/ann/stress_surrogate.h"
 #include "solvers/ann/strain_history.h"
 #include "solvers/common/errors.h"
@@ -60,7 +62,45 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
   return member.Bytes();
 }
 
+std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& context) {
+  std::optional<SoilParameters> soil;
+  try {
+    soil = ParseCanonicalText(work.soil_parameters());
+  } catch (const std::invalid_argument& e) {
+    throw InputError("training.rig_paths.soil_parameters", e.what());
+  }
+  Require(soil.has_value(), "training.rig_paths.soil_parameters", "is missing");
+  TractionRequest request;
+  request.soil.parameters = soil;
+  request.tyre.diameter_m = work.diameter_m();
+  request.tyre.width_m = work.width_m();
+  request.tyre.section_height_m = 0.5 * work.width_m();
+  request.wheel_load_n = work.wheel_load_n();
+  request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+  const tiers::FeDeTier fe_de(tiers::FeDeOptions::Preset(work.fe_de_preset()));
+  const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(fe_de, request, context);
+  const int count = static_cast<int>(recorded.paths.size());
+  Require(count > 0, "training.rig_paths", "the rig run recorded no paths");
+  v1::RigPathsOutput output;
+  output.set_elements(recorded.run.elements);
+  output.set_fe_steps(recorded.run.fe_steps);
+  for (const ann::StrainHistory& path :
+       tiers::EvenlySpread(recorded.paths, work.training_points(), 0)) {
+    output.add_training(ann::SerializeHistory(path));
+  }
+  for (const ann::StrainHistory& path :
+       tiers::EvenlySpread(recorded.paths, work.held_out_points(),
+                           RigHeldOutOffset(count, work.training_points()))) {
+    output.add_held_out(ann::SerializeHistory(path));
+  }
+  return output.SerializeAsString();
+}
+
 }  // namespace
+
+int RigHeldOutOffset(int paths, int training_points) {
+  return paths / (2 * std::max(1, training_points)) + 1;
+}
 
 std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& context) {
   switch (work.work_case()) {
@@ -68,6 +108,8 @@ std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& 
       return RunRvePath(work.rve_path(), context);
     case v1::TrainingWork::kTrainMember:
       return TrainMember(work.train_member(), context);
+    case v1::TrainingWork::kRigPaths:
+      return RunRigPaths(work.rig_paths(), context);
     default:
       throw InputError("training", "names no work");
   }

@@ -4,7 +4,9 @@
 //     RVE numerics of an fe-de configuration; its answer is the path's history (SerializeHistory);
 //   - an ensemble member: one stress surrogate (solvers/ann/stress_surrogate.h) trained, or
 //     fine-tuned from a registered model's member, on the histories it carries; its answer is the
-//     member's TorchScript bytes. Cancellation is checked before every epoch.
+//     member's TorchScript bytes. Cancellation is checked before every epoch;
+//   - an fe-de rig run with every point's path recorded (seed 000's step 2), alone on the worker;
+//     its answer is a RigPathsOutput with the paths kept (evenly spread over the bin).
 #pragma once
 
 #include <string>
@@ -21,5 +23,8 @@ std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& 
 
 v1::RvePathWork ToProto(const ann::LabPathSpec& spec);
 ann::LabPathSpec LabPathSpecOf(const v1::RvePathWork& work);
+// The recorded paths a RigPathsWork keeps of a run with `paths` points: training first, then the
+// held-out ones between them (tiers::EvenlySpread).
+int RigHeldOutOffset(int paths, int training_points);
 
 }  // namespace gonogo::server

@@ -36,6 +36,7 @@
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
 #include "solvers/tiers/fe_de_calibration.h"
+#include "solvers/tiers/fe_de_pace.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "solvers/tiers/soil_catalogue.h"
 
@@ -323,42 +324,20 @@ int RunCalibration(const CommandLine& line, int rank) {
 // and the pace, and the whole curve at that pace.
 int MeasurePace(const CommandLine& line, const tiers::FeDeTier& tier,
                 const TractionRequest& request, ComputeContext context, int rank) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto elapsed = [start] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  double fraction_done = 0, first_report_s = -1, first_fraction = 0, last_report_s = 0;
-  context.progress = [&](double fraction) {
-    if (first_report_s < 0) {  // the first report comes after the setup (templates, depths)
-      first_report_s = elapsed();
-      first_fraction = fraction;
-    }
-    fraction_done = fraction;
-    last_report_s = elapsed();  // the pace runs from the first report to the last
-    std::fprintf(stderr, "\r  %5.2f %% after %.0f s", 100 * fraction, elapsed());
-  };
-  const double limit_s = line.stop_after_s;
-  context.cancelled = [&] { return elapsed() > limit_s; };
-  try {
-    tier.Run(request, context);
-  } catch (const CancelledError&) {
-  }
+  const tiers::FeDePace pace = tiers::MeasureFeDePace(
+      tier, request, line.stop_after_s, context, [](double fraction, double elapsed_s) {
+        std::fprintf(stderr, "\r  %5.2f %% after %.0f s", 100 * fraction, elapsed_s);
+      });
   if (rank != 0) return 0;
-  const tiers::FeDeOptions& o = tier.options();
-  const rig::DrawbarPullProcedure& p = o.procedure;
-  const double procedure_s =
-      p.gravity_settle_s + p.load_settle_s + p.self_propelled_s + p.slip_ramp_s;
-  const double total_steps = procedure_s / o.fe_time_step_s;
-  const double steps = (fraction_done - first_fraction) * total_steps;
-  const double stepping_s = last_report_s - first_report_s;
+  const double procedure_s = pace.total_steps * tier.options().fe_time_step_s;
   std::fprintf(stderr,
                "\n%s, %g grains per RVE: setup %.1f s; %.0f of %.0f FE steps (%.2f %% of the "
                "procedure, %.3f s simulated) in %.1f s, %.2f s per FE step; the whole procedure "
                "at this pace: %.2f h\n",
                tier.Version().c_str(), request.soil.parameters->Get("grains_per_rve"),
-               first_report_s, steps, total_steps, 100 * fraction_done, fraction_done * procedure_s,
-               stepping_s, stepping_s / std::max(steps, 1.0),
-               (first_report_s + total_steps * stepping_s / std::max(steps, 1.0)) / 3600);
+               pace.setup_s, pace.steps_done, pace.total_steps, 100 * pace.fraction_done,
+               pace.fraction_done * procedure_s, pace.stepping_s, pace.seconds_per_step(),
+               pace.projected_s() / 3600);
   return 0;
 }
 

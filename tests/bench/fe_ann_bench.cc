@@ -2,6 +2,7 @@
 //
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
+//                       [--fe-de-budget-s S]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -11,7 +12,9 @@
 //     ensemble (3 members, the envelope's checks included);
 //   - a traction curve of the preset's rig (0.5 x 0.2 m wheel) by fe-de and by fe-ann: wall
 //     seconds, the fe-ann phases (network, fallbacks, model load, the rest: FE and contact), the
-//     speedup and the largest differences;
+//     speedup and the largest differences; with --fe-de-budget-s, a configuration whose fe-de
+//     curve takes hours (default): fe-de run for S seconds and its whole time projected from its
+//     pace (solvers/tiers/fe_de_pace.h, a lower bound), and fe-ann run to the end;
 //   - peak resident memory after each part.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
@@ -30,6 +33,7 @@
 #include "solvers/ann/strain_history.h"
 #include "solvers/dem/rve/rve_soil.h"
 #include "solvers/tiers/fe_ann_tier.h"
+#include "solvers/tiers/fe_de_pace.h"
 #include "solvers/tiers/soil_catalogue.h"
 #include "solvers/tiers/surrogate_training.h"
 
@@ -64,7 +68,7 @@ double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& eva
 int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
   int steps = 40, walks = 12, epochs = 200, threads = 2;
-  double load_n = 1000;
+  double load_n = 1000, fe_de_budget_s = 0;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
@@ -74,6 +78,9 @@ int main(int argc, char** argv) {
   app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
       ->capture_default_str();
   app.add_option("--wheel-load-n", load_n, "the rig wheel's load, N")->capture_default_str();
+  app.add_option("--fe-de-budget-s", fe_de_budget_s,
+                 "> 0: run fe-de this long and project its whole time from its pace")
+      ->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads running the training paths")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -153,27 +160,49 @@ int main(int argc, char** argv) {
     request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
 
     auto start = std::chrono::steady_clock::now();
-    const tiers::FeDeRunReport de = tiers::FeDeTier(fe_de).Run(request, {});
-    const double de_s = Since(start);
-    std::printf("fe-de curve: %.1f s wall, %d elements, %d FE steps; peak RSS %.0f MB\n", de_s,
-                de.elements, de.fe_steps, PeakRssMb());
+    tiers::FeDeRunReport de;
+    double de_s = 0;
+    if (fe_de_budget_s > 0) {
+      const tiers::FeDePace pace =
+          tiers::MeasureFeDePace(tiers::FeDeTier(fe_de), request, fe_de_budget_s);
+      de_s = pace.projected_s();
+      std::printf("fe-de curve: not run to the end: %.0f of %.0f FE steps in %.1f s after a %.1f "
+                  "s setup, %.3f s per FE step; the whole curve at this pace %.0f s (%.2f h); "
+                  "peak RSS %.0f MB\n",
+                  pace.steps_done, pace.total_steps, pace.stepping_s, pace.setup_s,
+                  pace.seconds_per_step(), de_s, de_s / 3600, PeakRssMb());
+    } else {
+      de = tiers::FeDeTier(fe_de).Run(request, {});
+      de_s = Since(start);
+      std::printf("fe-de curve: %.1f s wall, %d elements, %d FE steps; peak RSS %.0f MB\n", de_s,
+                  de.elements, de.fe_steps, PeakRssMb());
+    }
+    std::fflush(stdout);
     start = std::chrono::steady_clock::now();
     const tiers::AnnRunReport ann = fe_ann.Run(request, {});
     const double ann_s = Since(start);
     const double rest_s =
         ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
-    std::printf("fe-ann curve: %.2f s wall (%.1fx): network %.2f s (%lld point updates, %.1f us "
+    std::printf("fe-ann curve: %.2f s wall (%.1fx%s): network %.2f s (%lld point updates, %.1f us "
                 "each), fallbacks %d in %.2f s, model load %.3f s, FE and contact %.2f s; peak "
                 "RSS %.0f MB\n",
-                ann_s, de_s / ann_s, ann.network_seconds,
-                static_cast<long long>(ann.network_point_updates),
+                ann_s, de_s / ann_s, fe_de_budget_s > 0 ? " of the projection" : "",
+                ann.network_seconds, static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
                 ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
-    const tiers::CurveDifference worst = tiers::WorstDifference(ann.curve, de.curve, request);
-    std::printf("fe-ann against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
-                "%.1f %% of rW, sinkage %.1f %% of r\n",
-                100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
-                100 * worst.sinkage_over_r);
+    if (fe_de_budget_s > 0) {
+      std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
+                  "sinkage_m\n");
+      for (const TractionPoint& p : ann.curve.points) {
+        std::printf("%.2f,%.1f,%.2f,%.5f\n", p.slip, p.drawbar_pull_n, p.torque_nm, p.sinkage_m);
+      }
+    } else {
+      const tiers::CurveDifference worst = tiers::WorstDifference(ann.curve, de.curve, request);
+      std::printf("fe-ann against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
+                  "%.1f %% of rW, sinkage %.1f %% of r\n",
+                  100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
+                  100 * worst.sinkage_over_r);
+    }
     std::filesystem::remove_all(directory);
     return 0;
   } catch (const std::exception& e) {

@@ -5,7 +5,8 @@
 //     trains its members on the pool; the model it registers is the one `gonogo-ann --register`
 //     makes in-process from the same recipe (same data hash, same held-out errors to the digit),
 //     and an fe-ann curve runs with it.
-//   - A second training on the same soil takes every path from the dataset (none recomputed).
+//   - A second training on the same soil takes every path from the dataset (none recomputed); a
+//     third adds the paths of an fe-de rig run's points (seed 000's step 2), run on a worker.
 //   - The dataset lists and exports (CSV and .npy, with an index naming the rank of each path).
 //   - Bad requests are refused by field; a cancelled training stops and registers nothing; a
 //     training interrupted by a drain resumes at the next start from the paths it had stored.
@@ -103,8 +104,8 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   const CliRun second =
       Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --unanchored");
   ASSERT_EQ(second.exit_code, 0) << second.out;
-  EXPECT_NE(second.out.find("RVE strain paths: 24 of 24 (24 from dataset"), std::string::npos)
-      << second.out;
+  EXPECT_NE(second.out.find("tasks 27/27  cache hits 24"), std::string::npos)
+      << "24 paths from the dataset, 3 members trained:\n" << second.out;
   EXPECT_NE(second.out.find("mlp-16x16-tanh, 3 members"), std::string::npos) << second.out;
 
   // The offline trainer on the same recipe, registering into the same data directory.
@@ -173,6 +174,29 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(curve.exit_code, 0) << curve.out;
   EXPECT_NE(curve.out.find("surrogate model " + trained), std::string::npos) << curve.out;
 
+  // Seed 000's step 2: the paths of a rig run's points join the data, the run on one worker.
+  const CliRun with_rig = Gonogo(server.endpoint(), std::string("train ") + kRecipe +
+                                                        " --hidden 16x16 --rig-load-n 1000 "
+                                                        "--rig-points 4");
+  ASSERT_EQ(with_rig.exit_code, 0) << with_rig.out;
+  EXPECT_NE(with_rig.out.find("RVE strain paths and rig paths: 24 of 30 (24 from dataset"),
+            std::string::npos)
+      << with_rig.out;
+  EXPECT_NE(with_rig.out.find("tasks 33/33  cache hits 24"), std::string::npos) << with_rig.out;
+  EXPECT_NE(with_rig.out.find("; rig point 2 "), std::string::npos) << "held out:\n" << with_rig.out;
+  EXPECT_EQ(with_rig.out.find("; rig point 3 "), std::string::npos) << "half as many held out:\n"
+                                                                   << with_rig.out;
+  const CliRun with_rig_listed = Gonogo(server.endpoint(), "dataset");
+  EXPECT_NE(with_rig_listed.out.find("histories: 30 (24 training, 6 held out)"), std::string::npos)
+      << with_rig_listed.out;
+  const CliRun rig_export = Gonogo(server.endpoint(), "dataset export " + dataset + " --out " +
+                                                          (dir.path() / "export2").string());
+  ASSERT_EQ(rig_export.exit_code, 0) << rig_export.out;
+  const std::string rig_index = ReadFile(dir.path() / "export2" / (dataset + ".paths.csv"));
+  EXPECT_NE(rig_index.find(",rig-point,rig 1000 N point 4,training,"), std::string::npos)
+      << rig_index;
+  EXPECT_NE(rig_index.find(",rig-point,rig point 2,held-out,"), std::string::npos) << rig_index;
+
   // Refused by field, before anything runs.
   const std::vector<std::pair<std::string, std::string>> refusals = {
       {"train --soil no-such-soil", "soil_name: no dem-hertz-mindlin soil 'no-such-soil'"},
@@ -182,6 +206,9 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
        "hidden_widths: a fine-tuned model keeps its base model's layers"},
       {"train --soil seed000_sand_rve100 --pressures-kpa 5 2", "pressures_kpa: must be in"},
       {"train --soil seed000_sand_rve100 --members 2", "members: must lie in [3, 64]"},
+      {"train --soil seed000_sand_rve100 --rig-points 4", "rig_load_n: is needed with"},
+      {"train --soil seed000_sand_rve100 --rig-load-n 1000 --rig-width-m 0.6",
+       "rig_width_m: must lie in (0, rig_diameter_m]"},
       {"dataset export no-such --out " + exported.string(), "NOT_FOUND: dataset_id"},
   };
   for (const auto& [args, message] : refusals) {
