@@ -179,4 +179,20 @@ int Client::WaitUntilDone(const std::string& id, const std::string& what) {
   return kExitJobFailed;
 }
 
+int Client::WaitForSummary(const std::string& id, const std::string& what,
+                           google::protobuf::Message* summary) {
+  if (const int rc = WaitUntilDone(id, what); rc != kExitOk) return rc;
+  grpc::ClientContext ctx;
+  v1::GetJobRequest get;
+  get.set_job_id(id);
+  v1::Job done;
+  const grpc::Status s = stub_->GetJob(&ctx, get, &done);
+  if (!s.ok()) return Fail(s);
+  if (!google::protobuf::util::JsonStringToMessage(done.summary_json(), summary).ok()) {
+    std::cerr << "gonogo: the server's summary of " << what << " " << id << " is unreadable\n";
+    return kExitServer;
+  }
+  return kExitOk;
+}
+
 }  // namespace gonogo::cli

@@ -73,6 +73,12 @@ class Client {
   // `what` names the job in the message ("job", "curve job").
   int WaitUntilDone(const std::string& id, const std::string& what);
 
+  // WaitUntilDone, then the finished job's summary_json parsed into `summary` (a curve job's
+  // TractionCurve, a training job's SurrogateModel). Returns kExitOk, or the exit code after saying
+  // why on stderr.
+  int WaitForSummary(const std::string& id, const std::string& what,
+                     google::protobuf::Message* summary);
+
   v1::MobilityService::Stub& stub() { return *stub_; }
 
  private:

@@ -64,18 +64,7 @@ int CurveAsJob(Client& client, const v1::GetTractionCurveRequest& req, bool no_w
     std::cout << job.job_id() << "\n";
     return kExitOk;
   }
-  if (const int rc = client.WaitUntilDone(job.job_id(), "curve job"); rc != kExitOk) return rc;
-  grpc::ClientContext ctx;
-  v1::GetJobRequest get;
-  get.set_job_id(job.job_id());
-  v1::Job done;
-  const grpc::Status s = client.stub().GetJob(&ctx, get, &done);
-  if (!s.ok()) return Fail(s);
-  if (!google::protobuf::util::JsonStringToMessage(done.summary_json(), curve).ok()) {
-    std::cerr << "gonogo: the server's curve is unreadable\n";
-    return kExitServer;
-  }
-  return kExitOk;
+  return client.WaitForSummary(job.job_id(), "curve job", curve);
 }
 
 void PrintCurveCsv(const v1::TractionCurve& curve) {

@@ -96,17 +96,9 @@ int RunTrain(Client& client, TrainOptions o) {
     std::cout << job.job_id() << "\n";
     return kExitOk;
   }
-  if (const int rc = client.WaitUntilDone(job.job_id(), "training job"); rc != kExitOk) return rc;
-  grpc::ClientContext ctx;
-  v1::GetJobRequest get;
-  get.set_job_id(job.job_id());
-  v1::Job done;
-  const grpc::Status s = client.stub().GetJob(&ctx, get, &done);
-  if (!s.ok()) return Fail(s);
   v1::SurrogateModel model;
-  if (!google::protobuf::util::JsonStringToMessage(done.summary_json(), &model).ok()) {
-    std::cerr << "gonogo: the server's model record is unreadable\n";
-    return kExitServer;
+  if (const int rc = client.WaitForSummary(job.job_id(), "training job", &model); rc != kExitOk) {
+    return rc;
   }
   std::cout << "registered ";
   PrintModel(model);

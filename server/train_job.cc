@@ -401,7 +401,8 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       path_tasks.insert(path_tasks.begin(), TrainingTask(std::move(work), config_.task_delay_ms));
       task_path.insert(task_path.begin(), planned.size());
     }
-    const int total_tasks = static_cast<int>(planned.size()) + recipe.members;
+    const int members = fine_tuning ? base->members : recipe.members;
+    const int total_tasks = static_cast<int>(planned.size()) + members;
     int done = stored;
     status.set_tasks_total(static_cast<uint32_t>(total_tasks));
     status.set_tasks_done(static_cast<uint32_t>(done));
@@ -493,7 +494,6 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     }
 
     // 2. The members, one task each.
-    const int members = fine_tuning ? base->members : recipe.members;
     member_work.set_epochs(recipe.training.epochs);
     member_work.set_batch_size(recipe.training.batch_size);
     member_work.set_learning_rate(recipe.training.learning_rate);

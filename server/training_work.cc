@@ -15,19 +15,25 @@ namespace gonogo::server {
 
 namespace {
 
-std::string RunRvePath(const v1::RvePathWork& work, const ComputeContext& context) {
+// The soil of a task, from its canonical text; InputError(field, ...) when it is not one.
+SoilParameters SoilOf(const std::string& canonical_text, const std::string& field) {
   std::optional<SoilParameters> soil;
   try {
-    soil = ParseCanonicalText(work.soil_parameters());
+    soil = ParseCanonicalText(canonical_text);
   } catch (const std::invalid_argument& e) {
-    throw InputError("training.rve_path.soil_parameters", e.what());
+    throw InputError(field, e.what());
   }
-  Require(soil.has_value(), "training.rve_path.soil_parameters", "is missing");
+  Require(soil.has_value(), field, "is missing");
+  return *soil;
+}
+
+std::string RunRvePath(const v1::RvePathWork& work, const ComputeContext& context) {
+  const SoilParameters soil = SoilOf(work.soil_parameters(), "training.rve_path.soil_parameters");
   const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
   // The template is settled once per process and configuration (SharedRveMaterial), then shared
   // by every path this rank runs.
   const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
-      *soil, fe_de.numerics, "training.rve_path.soil_parameters"));
+      soil, fe_de.numerics, "training.rve_path.soil_parameters"));
   if (context.Cancelled()) throw CancelledError();
   const ann::LabPathSpec spec = LabPathSpecOf(work);
   spec.Validate("training.rve_path.");
@@ -63,13 +69,7 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
 }
 
 std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& context) {
-  std::optional<SoilParameters> soil;
-  try {
-    soil = ParseCanonicalText(work.soil_parameters());
-  } catch (const std::invalid_argument& e) {
-    throw InputError("training.rig_paths.soil_parameters", e.what());
-  }
-  Require(soil.has_value(), "training.rig_paths.soil_parameters", "is missing");
+  const SoilParameters soil = SoilOf(work.soil_parameters(), "training.rig_paths.soil_parameters");
   TractionRequest request;
   request.soil.parameters = soil;
   request.tyre.diameter_m = work.diameter_m();

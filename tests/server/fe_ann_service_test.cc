@@ -19,17 +19,6 @@ const char kWheel[] =
     "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
     "--section-height 0.1 --wheel-load 1000 --slip-step 0.25";
 
-// gonogo-ann, trained small, registering into `data_dir`; its output and exit code.
-CliRun TrainAndRegister(const fs::path& data_dir) {
-  const fs::path out = data_dir.parent_path() / "gonogo-ann.out";
-  const std::string command =
-      "OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann --soil " +
-      "seed000_sand_rve100 --preset tiny --steps 20 --walks 4 --architecture 16x16 --epochs 60 " +
-      "--threads 2 --register " + data_dir.string() + " > " + out.string() + " 2>&1";
-  const int status = std::system(command.c_str());
-  return {WEXITSTATUS(status), ReadFile(out)};
-}
-
 TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   ScratchDir dir("fe-ann-service");
   const fs::path data = dir.path() / "data";
@@ -69,7 +58,7 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_NE(map_refused.out.find("FAILED_PRECONDITION"), std::string::npos) << map_refused.out;
   EXPECT_FALSE(fs::exists(dir.path() / "map0" / "gonogo.tif"));
 
-  const CliRun trained = TrainAndRegister(data);
+  const CliRun trained = RegisterWithGonogoAnn(data);
   ASSERT_EQ(trained.exit_code, 0) << trained.out;
   std::smatch match;
   ASSERT_TRUE(std::regex_search(trained.out, match,

@@ -43,15 +43,24 @@ ScratchDir::~ScratchDir() {
   fs::remove_all(path_, ec);
 }
 
-CliRun Gonogo(const std::string& endpoint, const std::string& args) {
-  const std::string cmd =
-      BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
+CliRun RunShell(const std::string& command) {
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
   std::string out;
   char buf[4096];
   while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
   const int status = pclose(p);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+CliRun Gonogo(const std::string& endpoint, const std::string& args) {
+  return RunShell(BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args);
+}
+
+CliRun RegisterWithGonogoAnn(const fs::path& data_dir) {
+  return RunShell("OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann " +
+                  kSmallSurrogateRecipe +
+                  " --preset tiny --architecture 16x16 --threads 2 --register " +
+                  data_dir.string());
 }
 
 bool MakeSampleTerrain(const fs::path& out, int size) {

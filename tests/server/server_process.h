@@ -72,6 +72,16 @@ struct CliRun {
   std::string out;
 };
 CliRun Gonogo(const std::string& endpoint, const std::string& args);
+// A shell command's stdout and stderr together, and its exit code.
+CliRun RunShell(const std::string& command);
+
+// The small fe-ann recipe the service tests train (seed000_sand_rve100, 20-step paths, 4 walks,
+// 60 epochs), as gonogo-ann and gonogo train options.
+inline constexpr char kSmallSurrogateRecipe[] =
+    "--soil seed000_sand_rve100 --steps 20 --walks 4 --epochs 60";
+// gonogo-ann on that recipe at the tiny preset, a 16x16 MLP, registering into `data_dir`: its
+// output and exit code.
+CliRun RegisterWithGonogoAnn(const fs::path& data_dir);
 
 struct MapFiles {
   std::string cone_index, slope, elevation, soil_class, soil_table;

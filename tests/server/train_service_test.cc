@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <regex>
+#include <sstream>
 #include <thread>
 
 #include "server_process.h"
@@ -23,7 +24,7 @@
 namespace gonogo::testing {
 namespace {
 
-const char kRecipe[] = "--soil seed000_sand_rve100 --steps 20 --walks 4 --epochs 60";
+const char* const kRecipe = kSmallSurrogateRecipe;
 
 // The text after `label` on the line of `out` that holds `label`, after `from`.
 std::string LineAfter(const std::string& out, const std::string& label, size_t from = 0) {
@@ -109,17 +110,12 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_NE(second.out.find("mlp-16x16-tanh, 3 members"), std::string::npos) << second.out;
 
   // The offline trainer on the same recipe, registering into the same data directory.
-  const fs::path offline_out = dir.path() / "gonogo-ann.out";
-  const std::string offline_command =
-      "OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann " + kRecipe +
-      " --preset tiny --architecture 16x16 --threads 2 --register " + data.string() + " > " +
-      offline_out.string() + " 2>&1";
-  ASSERT_EQ(std::system(offline_command.c_str()), 0) << ReadFile(offline_out);
+  const CliRun offline_run = RegisterWithGonogoAnn(data);
+  ASSERT_EQ(offline_run.exit_code, 0) << offline_run.out;
   std::smatch match;
-  const std::string offline_text = ReadFile(offline_out);
-  ASSERT_TRUE(std::regex_search(offline_text, match,
+  ASSERT_TRUE(std::regex_search(offline_run.out, match,
                                 std::regex("registered model (seed000_sand_rve100-[^ ]+)")))
-      << offline_text;
+      << offline_run.out;
   const std::string offline = match[1];
   const CliRun models = Gonogo(server.endpoint(), "models --soil seed000_sand_rve100");
   ASSERT_EQ(models.exit_code, 0) << models.out;
@@ -160,10 +156,24 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   const CliRun npy = Gonogo(server.endpoint(), "dataset export " + dataset + " --format npy --role "
                                                "held-out --out " + exported.string());
   ASSERT_EQ(npy.exit_code, 0) << npy.out;
-  const std::string array = ReadFile(exported / (dataset + "-held-out.npy"));
-  EXPECT_EQ(array.rfind("\x93NUMPY", 0), 0u);
-  EXPECT_NE(array.find("'shape': ("), std::string::npos);
-  EXPECT_EQ(CountLines(ReadFile(exported / (dataset + "-held-out.paths.csv"))), 5u);
+  const std::string held_out_index = ReadFile(exported / (dataset + "-held-out.paths.csv"));
+  EXPECT_EQ(CountLines(held_out_index), 5u);
+  size_t held_out_steps = 0;  // the index's `steps` column, summed
+  std::istringstream index_lines(held_out_index);
+  std::string line;
+  std::getline(index_lines, line);  // header
+  while (std::getline(index_lines, line)) {
+    std::istringstream fields(line);
+    std::string field;
+    for (int column = 0; column <= 5; ++column) std::getline(fields, field, ',');
+    held_out_steps += std::stoul(field);
+  }
+  // Debian's NumPy (python3-numpy, with python3-gdal) reads the .npy: one row per step.
+  const CliRun numpy = RunShell("/usr/bin/python3 -c \"import numpy, sys; a = numpy.load(sys.argv[1]); "
+                                "print(a.shape, a.dtype)\" " +
+                                (exported / (dataset + "-held-out.npy")).string());
+  ASSERT_EQ(numpy.exit_code, 0) << numpy.out;
+  EXPECT_EQ(numpy.out, "(" + std::to_string(held_out_steps) + ", 17) float64\n");
   EXPECT_EQ(CountLines(ReadFile(exported / (dataset + "-held-out.npy.columns.txt"))), 17u);
 
   // The pool's model computes an fe-ann curve.
