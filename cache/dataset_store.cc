@@ -43,7 +43,7 @@ std::string DatasetId(const std::string& soil_name, const std::string& fe_de_pre
   return soil_name + "-" + fe_de_preset + "-" + hex;
 }
 
-void DatasetStore::Put(const StoredHistory& h) {
+bool DatasetStore::Put(const StoredHistory& h) {
   WriteTransaction tx(db_);
   Statement s = db_.Prepare(std::string("INSERT OR IGNORE INTO rve_histories (") + kColumns +
                             ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
@@ -54,7 +54,16 @@ void DatasetStore::Put(const StoredHistory& h) {
   s.Bind(13, h.code_version).Bind(14, h.computed_by).Bind(15, h.compute_seconds);
   s.Bind(16, h.created_unix_ms);
   s.Run();
+  const bool stored = db_.Changes() > 0;
   tx.Commit();
+  return stored;
+}
+
+bool DatasetStore::Has(const std::string& key) {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare("SELECT 1 FROM rve_histories WHERE history_key = ?");
+  s.Bind(1, key);
+  return s.Step();
 }
 
 std::optional<StoredHistory> DatasetStore::Find(const std::string& key) {

@@ -65,9 +65,11 @@ class DatasetStore {
  public:
   explicit DatasetStore(Database& db) : db_(db) {}
 
-  // Stores one history (committed at once). A key already stored is left as it is: the same path
-  // on the same RVE is the same history.
-  void Put(const StoredHistory& history);
+  // Stores one history (committed at once); true when it was stored, false when its key already
+  // was (that copy is left as it is: the same path on the same RVE is the same history).
+  bool Put(const StoredHistory& history);
+  // Whether a history of this key is stored (without reading it).
+  bool Has(const std::string& history_key);
   std::optional<StoredHistory> Find(const std::string& history_key);
   // Datasets, newest first; `soil_name` non-empty: that soil's.
   std::vector<DatasetSummary> List(const std::string& soil_name = "");

@@ -244,9 +244,10 @@ TaskSpec TrainingTask(v1::TrainingWork work, uint32_t debug_delay_ms) {
 }
 
 struct PlannedPath {
-  tiers::NamedLabPath path;
+  tiers::NamedLabPath path;  // a laboratory path's specification; a rig path's name only
   std::string role;
   std::string key;
+  bool from_rig = false;  // made by the job's rig run, not by a path task of its own
 };
 
 // The k-th kept path of a rig run (training or held out), by what the run and the choice were.
@@ -339,11 +340,13 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
 
     // 1. The strain paths: the stored ones from the dataset, the others on the pool.
     std::vector<PlannedPath> planned;
-    for (tiers::NamedLabPath& path : tiers::TrainingPaths(recipe)) {
-      planned.push_back({std::move(path), cache::kTrainingRole, ""});
-    }
-    for (tiers::NamedLabPath& path : tiers::HeldOutPaths(recipe)) {
-      planned.push_back({std::move(path), cache::kHeldOutRole, ""});
+    for (const auto& [paths, role] :
+         {std::make_pair(tiers::TrainingPaths(recipe), cache::kTrainingRole),
+          std::make_pair(tiers::HeldOutPaths(recipe), cache::kHeldOutRole)}) {
+      for (const tiers::NamedLabPath& path : paths) {
+        planned.push_back(
+            {path, role, HistoryKey(soil_text, preset, rve_version, path.spec), false});
+      }
     }
     // Seed 000's step 2: the kept paths of an fe-de rig run's points, after the lab paths.
     const RigRecipe rig = RigRecipeOf(request);
@@ -359,6 +362,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
                                                         : "rig point " + std::to_string(k + 1);
           path.role = role;
           path.key = RigPathKey(soil_text, preset, rve_version, rig, role, k);
+          path.from_rig = true;
           rig_paths.push_back(planned.size());
           planned.push_back(std::move(path));
         }
@@ -370,13 +374,11 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     int stored = 0;
     bool rig_missing = false;
     for (size_t k = 0; k < planned.size(); ++k) {
-      const bool on_rig = k >= planned.size() - rig_paths.size();
-      if (!on_rig) planned[k].key = HistoryKey(soil_text, preset, rve_version, planned[k].path.spec);
-      if (store.Find(planned[k].key)) {
+      if (store.Has(planned[k].key)) {
         ++stored;
         continue;
       }
-      if (on_rig) {
+      if (planned[k].from_rig) {
         rig_missing = true;
         continue;
       }
@@ -435,10 +437,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       row.computed_by = result.computed_by;
       row.compute_seconds = result.compute_seconds;
       row.created_unix_ms = NowUnixMs();
-      if (!store.Find(row.history_key)) {
-        store.Put(row);
-        ++done;
-      }
+      if (store.Put(row)) ++done;
     };
     const auto generation_start = std::chrono::steady_clock::now();
     const TaskResult paths_outcome = RunTrainingTasks(
@@ -450,18 +449,14 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
             Require(output.training_size() == rig.training_points &&
                         output.held_out_size() == rig.held_out_points,
                     "training.rig_paths", "the rig run kept another number of paths");
-            const double seconds_each =
-                result.compute_seconds / (rig.training_points + rig.held_out_points);
-            TaskResult each = result;
-            each.compute_seconds = seconds_each;
+            // The kept paths in the order of `rig_paths`: training, then held out.
+            std::vector<const std::string*> kept;
+            for (const std::string& bytes : output.training()) kept.push_back(&bytes);
+            for (const std::string& bytes : output.held_out()) kept.push_back(&bytes);
+            TaskResult each = result;  // the run's seconds shared among its paths
+            each.compute_seconds = result.compute_seconds / static_cast<double>(kept.size());
             for (size_t r = 0; r < rig_paths.size(); ++r) {
-              const int k = static_cast<int>(r) < rig.training_points
-                                ? static_cast<int>(r)
-                                : static_cast<int>(r) - rig.training_points;
-              const std::string& bytes = static_cast<int>(r) < rig.training_points
-                                             ? output.training(k)
-                                             : output.held_out(k);
-              keep(planned[rig_paths[r]], bytes, "rig-point", 0, each);
+              keep(planned[rig_paths[r]], *kept[r], "rig-point", 0, each);
             }
             spdlog::info("job {}: rig run at {} N ({} elements, {} FE steps) in {:.1f} s on {}",
                          id, rig.load_n, output.elements(), output.fe_steps(),

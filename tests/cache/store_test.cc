@@ -272,6 +272,8 @@ TEST_F(StoreTest, HistoriesPersistGroupIntoDatasetsAndKeepTheirFirstCopy) {
   EXPECT_EQ(found->history, blob) << "binary histories survive";
   EXPECT_EQ(found->computed_by, "rank 1");
   EXPECT_FALSE(store.Find("key-9").has_value());
+  EXPECT_TRUE(store.Has("key-0"));
+  EXPECT_FALSE(store.Has("key-9"));
   const std::vector<DatasetSummary> all = store.List();
   ASSERT_EQ(all.size(), 2u);
   EXPECT_EQ(all[0].dataset, other) << "newest first";
