@@ -5,6 +5,7 @@
 //                [--no-wait]
 //   gonogo dataset [--soil NAME]
 //   gonogo dataset export DATASET --out DIR [--format csv|npy] [--role training|held-out]
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -31,7 +32,10 @@ void PrintModel(const v1::SurrogateModel& m) {
             << "  data:      " << m.samples() << " steps, hash " << m.data_hash() << ", trained in "
             << FormatNumber(m.training_seconds()) << " s\n"
             << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
-            << FormatNumber(m.spread_threshold()) << "\n"
+            << FormatNumber(m.spread_threshold()) << ", principal stresses capped at "
+            << (std::isfinite(m.tensile_limit_pa()) ? FormatNumber(m.tensile_limit_pa()) + " Pa"
+                                                    : std::string("nothing (an older model)"))
+            << "\n"
             << "  held out:  worst " << Percent(m.worst_held_out_error());
   for (const auto& h : m.held_out()) std::cout << "; " << h.path() << " " << Percent(h.replay_error());
   std::cout << "\n  made by:   gonogo " << m.code_version() << ", unix ms " << m.created_unix_ms()

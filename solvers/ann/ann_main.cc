@@ -61,6 +61,10 @@ struct CommandLine {
   std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
   double rest_kpa = 0;            // > 0: only the rest test at this pressure
   int rest_steps = 200;
+  double rest_axial_strain = 0;  // the rest test's oedometric compression before resting
+  double increment_kpa = 0;  // > 0: only the increment-size study at this pressure
+  std::string increment_path = "triaxial";
+  std::vector<int> increment_steps = {40, 160, 640};
   double tune_learning_rate = 1e-3;
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
@@ -212,9 +216,10 @@ void Validate(const CommandLine& line, const std::string& model_directory,
     const auto& d = reference.run.curve.points;
     const tiers::CurveDifference worst =
         tiers::WorstDifference(ann.curve, reference.run.curve, request);
-    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%.2f,%.2f,%.2f\n", architecture.c_str(),
-                load_n, reference.seconds, seconds, reference.seconds / seconds,
-                ann.network_seconds, ann.fallback_seconds, ann.fallbacks,
+    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%.2f,%.2f,%.2f\n",
+                architecture.c_str(), load_n, reference.seconds, seconds,
+                reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
+                ann.fallbacks, static_cast<long long>(ann.tension_caps),
                 100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
                 100 * worst.sinkage_over_r);
     for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
@@ -253,6 +258,8 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000);
   std::printf("%.2f\n",
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
+  std::printf("# %s: principal stresses capped at %g Pa (the training data's most tensile)\n",
+              name.c_str(), ensemble.envelope().tensile_limit_pa);
   std::fflush(stdout);
   if (!line.out.empty()) ensemble.Save(line.out + "/" + name);
   if (!line.register_data_dir.empty()) {
@@ -269,6 +276,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     record.samples = reports.front().samples;
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
+    record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
     for (std::size_t k = 0; k < study.held_out.size(); ++k) {
       record.held_out.push_back({study.held_out_names[k], held_out_errors[k]});
       record.worst_held_out_error = std::max(record.worst_held_out_error, held_out_errors[k]);
@@ -293,39 +301,101 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                          : line.out + "/" + name;
     if (line.out.empty()) ensemble.Save(directory);
     std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
-                "fallback_s,fallbacks,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+                "fallback_s,fallbacks,capped,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
     Validate(line, directory, name, study.soil, study.references);
     if (line.out.empty()) std::filesystem::remove_all(directory);
   }
 }
 
-// The RVE at rest: settled isotropically at `line.rest_kpa`, then `line.rest_steps` zero
-// increments, each committed. Prints the mean stress p and the deviatoric q (von Mises) every
-// tenth step: what an FE point held still would see (a surrogate anchored at rest sees nothing).
+// The RVE at rest: settled isotropically at `line.rest_kpa`, optionally compressed along z by
+// `line.rest_axial_strain` with the lateral strains held (oedometric, in 20 increments: a
+// deviatoric load like a point's under a wheel), then `line.rest_steps` zero increments, each
+// committed. Prints the mean stress p and the deviatoric q (von Mises) every tenth zero step:
+// what an FE point held still would see (a surrogate anchored at rest sees nothing).
 int RunRestTest(const CommandLine& line, const dem::rve::RveMaterial& rve) {
   dem::rve::Rve settled = rve.initial();
   settled.SettleIsotropic(line.rest_kpa * 1e3);
   std::unique_ptr<material::MaterialState> state = rve.RestoreState(settled.Save());
-  std::printf("# rest test, %s, preset %s: settled at %g kPa, then %d zero increments\n",
-              line.soil.c_str(), line.preset.c_str(), line.rest_kpa, line.rest_steps);
-  std::printf("step,p_pa,q_pa,p_change_pct\n");
-  double first_p = 0;
-  for (int step = 0; step <= line.rest_steps; ++step) {
-    material::PointIncrement zero;
-    zero.committed = state.get();
-    std::vector<material::PointResponse> answer = rve.Update({zero}, false);
+  std::printf("# rest test, %s, preset %s: settled at %g kPa, compressed by %g along z (lateral "
+              "strains held), then %d zero increments\n",
+              line.soil.c_str(), line.preset.c_str(), line.rest_kpa, line.rest_axial_strain,
+              line.rest_steps);
+  const auto step_once = [&](const Matrix3& increment, const std::string& what) {
+    material::PointIncrement point;
+    point.committed = state.get();
+    point.displacement_gradient_increment = increment;
+    std::vector<material::PointResponse> answer = rve.Update({point}, false);
     if (answer.at(0).status != material::UpdateStatus::kOk) {
-      throw NumericalError("rest step " + std::to_string(step) + ": " + answer.at(0).reason);
+      throw NumericalError(what + ": " + answer.at(0).reason);
     }
-    const Matrix3& sigma = answer.at(0).stress_pa;
+    state = std::move(answer.at(0).state);
+    return answer.at(0).stress_pa;
+  };
+  constexpr int kLoadingSteps = 20;
+  Matrix3 compression = Matrix3::Zero();
+  compression(2, 2) = -line.rest_axial_strain / kLoadingSteps;
+  if (line.rest_axial_strain > 0) {
+    for (int step = 0; step < kLoadingSteps; ++step) {
+      step_once(compression, "loading step " + std::to_string(step));
+    }
+  }
+  std::printf("step,p_pa,q_pa,p_change_pct,q_change_pct\n");
+  double first_p = 0, first_q = 0;
+  for (int step = 0; step <= line.rest_steps; ++step) {
+    const Matrix3 sigma = step_once(Matrix3::Zero(), "rest step " + std::to_string(step));
     const double p = -sigma.trace() / 3;
     const Matrix3 deviator = sigma + p * Matrix3::Identity();
     const double q = std::sqrt(1.5 * deviator.squaredNorm());
-    if (step == 0) first_p = p;
+    if (step == 0) first_p = p, first_q = q;
     if (step % 10 == 0 || step == line.rest_steps) {
-      std::printf("%d,%.1f,%.1f,%.3f\n", step, p, q, 100 * (p - first_p) / first_p);
+      std::printf("%d,%.1f,%.1f,%.3f,%.3f\n", step, p, q, 100 * (p - first_p) / first_p,
+                  first_q > 0 ? 100 * (q - first_q) / first_q : 0.0);
     }
-    state = std::move(answer.at(0).state);
+  }
+  return 0;
+}
+
+// The RVE's answer against the size of its increments: one laboratory path (the recipe's strain:
+// 5 % axial for a triaxial, 10 % shear for a simple shear) at `line.increment_kpa`, taken in each
+// of `line.increment_steps` steps. A quasi-static packing answers the same whatever the step; the
+// RVE spreads each increment over at least min_steps_per_increment DE steps and relaxes it for
+// relax_steps, so a path of many small increments (an FE point's) gets more DE steps per unit of
+// strain than one of few large ones (a laboratory path's). Prints the mean stress p and the
+// deviatoric q (von Mises) at fractions of the path, per step count.
+int RunIncrementStudy(const CommandLine& line, const dem::rve::RveMaterial& rve) {
+  LabPathSpec spec;
+  spec.path = ParseLabPath(line.increment_path, "--increment-path");
+  spec.pressure_pa = line.increment_kpa * 1e3;
+  spec.max_strain = spec.path == LabPath::kSimpleShear ? 0.1 : 0.05;
+  std::printf("# increment study, %s, preset %s: %s at %g kPa to %g strain\n", line.soil.c_str(),
+              line.preset.c_str(), line.increment_path.c_str(), line.increment_kpa,
+              spec.max_strain);
+  std::printf("steps,fraction,strain,p_pa,q_pa,seconds\n");
+  DriverOptions options;
+  options.relative_tolerance = 0.02;  // as the training paths (tiers::RunLabPaths)
+  for (int steps : line.increment_steps) {
+    spec.steps = steps;
+    spec.Validate("--increment-steps.");
+    const auto start = std::chrono::steady_clock::now();
+    const StrainHistory history = RunLabPath(rve, spec, options);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!history.stopped_reason.empty()) {
+      std::printf("# %d steps stopped: %s\n", steps, history.stopped_reason.c_str());
+    }
+    const int settle = spec.settle_steps;  // recorded first
+    for (double fraction : {0.05, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0}) {
+      const int step = settle + static_cast<int>(std::lround(fraction * steps)) - 1;
+      if (step < 0 || step >= static_cast<int>(history.stresses_pa.size())) continue;
+      const Vector6& s = history.stresses_pa[static_cast<std::size_t>(step)];
+      const double p = -(s[0] + s[1] + s[2]) / 3;
+      const double q = std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) +
+                                        (s[1] - s[2]) * (s[1] - s[2]) +
+                                        (s[2] - s[0]) * (s[2] - s[0])) +
+                                 3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
+      std::printf("%d,%.2f,%.4f,%.1f,%.1f,%.2f\n", steps, fraction, fraction * spec.max_strain, p,
+                  q, seconds);
+    }
   }
   return 0;
 }
@@ -347,6 +417,7 @@ int Run(const CommandLine& line) {
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));
   if (line.rest_kpa > 0) return RunRestTest(line, *rve);
+  if (line.increment_kpa > 0) return RunIncrementStudy(line, *rve);
   const auto start = std::chrono::steady_clock::now();
   tiers::SurrogateRecipe recipe;
   recipe.steps = line.steps;
@@ -503,7 +574,22 @@ int main(int argc, char** argv) {
                  "only the rest test: the RVE settled at this pressure (kPa), then --rest-steps "
                  "zero increments; prints its stress as it drifts")
       ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--rest-axial-strain", line.rest_axial_strain,
+                 "the rest test's compression along z (lateral strains held) before the zero "
+                 "increments: a deviatoric load")
+      ->check(CLI::Range(0.0, 0.2))
+      ->capture_default_str();
   app.add_option("--rest-steps", line.rest_steps, "zero increments of the rest test")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--increment-kpa", line.increment_kpa,
+                 "only the increment-size study: --increment-path at this pressure (kPa) taken "
+                 "in each of --increment-steps steps; prints p and q along each")
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--increment-path", line.increment_path,
+                 "the increment study's laboratory path (triaxial, simple-shear, ...)")
+      ->capture_default_str();
+  app.add_option("--increment-steps", line.increment_steps, "the increment study's step counts")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--members", line.members, "ensemble members")

@@ -75,6 +75,16 @@ void FallbackLog::RecordNetworkCall(double seconds, std::int64_t points) {
   network_point_updates_ += points;
 }
 
+void FallbackLog::RecordTensionCaps(std::int64_t points) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  tension_caps_ += points;
+}
+
+std::int64_t FallbackLog::tension_caps() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return tension_caps_;
+}
+
 void FallbackLog::RecordFallbackSeconds(double seconds) {
   std::lock_guard<std::mutex> lock(mutex_);
   fallback_seconds_ += seconds;
@@ -289,6 +299,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
   log_->RecordNetworkCall(std::chrono::duration<double>(Clock::now() - network_start).count(),
                           static_cast<std::int64_t>(inputs.size()));
   const auto fallback_start = Clock::now();
+  std::int64_t tension_caps = 0;
   for (std::size_t k = 0; k < on_network.size(); ++k) {
     const std::size_t i = on_network[k];
     const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
@@ -303,11 +314,14 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     }
     if (answer.out_of_distribution) log_->RecordUnansweredFlag();
     const Matrix3& rotation = kinematics[k].rotation;
-    std::unique_ptr<AnnState> next =
-        Advance(committed, increments[i].displacement_gradient_increment,
-                inputs[k].strain_increment,
-                rotation * committed.stress_pa * rotation.transpose() +
-                    material::VoigtToStress(answer.stress_increment_pa));
+    bool capped = false;
+    const Matrix3 stress = ensemble_->Admissible(
+        rotation * committed.stress_pa * rotation.transpose() +
+            material::VoigtToStress(answer.stress_increment_pa),
+        &capped);
+    tension_caps += capped ? 1 : 0;
+    std::unique_ptr<AnnState> next = Advance(
+        committed, increments[i].displacement_gradient_increment, inputs[k].strain_increment, stress);
     next->flags += answer.out_of_distribution ? 1 : 0;
     material::PointResponse& response = responses[i];
     response.status = material::UpdateStatus::kOk;
@@ -335,6 +349,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       responses[i].state = std::move(next);
     }
   }
+  log_->RecordTensionCaps(tension_caps);
   log_->RecordFallbackSeconds(std::chrono::duration<double>(Clock::now() - fallback_start).count());
   return responses;
 }

@@ -15,6 +15,10 @@
 // including those of trial updates its caller then discarded (their cost, not their count of
 // points), and the seconds the network and the fallbacks took.
 //
+// A stress the network answers is kept admissible (SurrogateEnsemble::Admissible: no principal
+// stress more tensile than the training data's, none for a cohesionless RVE); the log counts the
+// answers capped. The tangent a capped point reports is the network's, not the cap's.
+//
 // A point may start from a state of the real model other than its fresh one (StateFrom: an RVE
 // settled at the stress of its depth in an FE bin); its fallback then replays from there.
 #pragma once
@@ -48,11 +52,13 @@ class FallbackLog {
   void RecordFallback(const Event& event);
   void RecordUnansweredFlag();
   void RecordNetworkCall(double seconds, std::int64_t points);
+  void RecordTensionCaps(std::int64_t points);  // answers SurrogateEnsemble::Admissible capped
   void RecordFallbackSeconds(double seconds);  // replays and points answered by the real model
   std::vector<Event> fallbacks() const;
   std::int64_t unanswered_flags() const;
   double network_seconds() const;
   std::int64_t network_point_updates() const;  // point updates the ensemble answered
+  std::int64_t tension_caps() const;
   double fallback_seconds() const;
 
  private:
@@ -61,6 +67,7 @@ class FallbackLog {
   std::int64_t unanswered_flags_ = 0;
   double network_seconds_ = 0;
   std::int64_t network_point_updates_ = 0;
+  std::int64_t tension_caps_ = 0;
   double fallback_seconds_ = 0;
 };
 

@@ -604,7 +604,8 @@ std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
 }
 
 std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
-                            const StrainHistory& history) {
+                            const StrainHistory& history,
+                            const AdmissibleStressFunction& admissible) {
   std::vector<Vector6> stresses;
   stresses.reserve(history.steps());
   SurrogateInput input;
@@ -613,9 +614,10 @@ std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
     const material::IncrementKinematics kinematics = material::HughesWinget(history.increments[s]);
     input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
     const Matrix3 before = material::VoigtToStress(input.stress_pa);
-    const Vector6 after =
+    Vector6 after =
         material::StressToVoigt(kinematics.rotation * before * kinematics.rotation.transpose()) +
         stress_increment(input);
+    if (admissible) after = material::StressToVoigt(admissible(material::VoigtToStress(after)));
     stresses.push_back(after);
     input.accumulated_strain += input.strain_increment;
     input.stress_pa = after;

@@ -158,10 +158,13 @@ std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
 std::vector<SurrogateInput> InputsOf(const StrainHistory& history);
 
 // A surrogate (or an ensemble's mean) run along a history's increments from its initial stress,
-// feeding back its own stresses (as it runs in an FE point): the predicted stress after each step.
+// feeding back its own stresses (as it runs in an FE point): the predicted stress after each step,
+// each passed through `admissible` when given (SurrogateEnsemble::Admissible).
 using StressIncrementFunction = std::function<Vector6(const SurrogateInput&)>;
+using AdmissibleStressFunction = std::function<Matrix3(const Matrix3&)>;
 std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
-                            const StrainHistory& history);
+                            const StrainHistory& history,
+                            const AdmissibleStressFunction& admissible = nullptr);
 std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history);
 
 // The replayed path's error relative to the path's own stress: mean over steps of

@@ -1,11 +1,13 @@
 #include "solvers/ann/surrogate_ensemble.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "solvers/common/byte_stream.h"
@@ -15,7 +17,8 @@ namespace gonogo::ann {
 namespace {
 
 constexpr int kInputs = 18;
-constexpr char kEnvelopeTag[9] = "GNGENV01";
+constexpr char kEnvelopeTag[9] = "GNGENV02";
+constexpr char kEnvelopeTagWithoutCap[9] = "GNGENV01";  // read only
 
 Eigen::VectorXd Raw(const SurrogateInput& input) {
   Eigen::VectorXd x(kInputs);
@@ -141,6 +144,19 @@ void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory
     inputs.insert(inputs.end(), steps.begin(), steps.end());
   }
   envelope_ = FitEnvelope(inputs);
+  double most_tensile = 0;  // a point with no contact left carries nothing: zero is admissible
+  for (const StrainHistory& history : histories) {
+    const auto principal = [](const Matrix3& stress) {
+      return Eigen::SelfAdjointEigenSolver<Matrix3>(stress, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .maxCoeff();
+    };
+    most_tensile = std::max(most_tensile, principal(history.initial_stress_pa));
+    for (const Vector6& stress : history.stresses_pa) {
+      most_tensile = std::max(most_tensile, principal(material::VoigtToStress(stress)));
+    }
+  }
+  envelope_.tensile_limit_pa = most_tensile;
   distance_threshold_ = envelope_.largest_training_distance;
   spread_threshold_ = 1.0;  // no flag while the training spread is measured
   double largest_spread = 0;
@@ -148,6 +164,17 @@ void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory
     largest_spread = std::max(largest_spread, answer.relative_spread);
   }
   spread_threshold_ = std::max(3 * largest_spread, 1e-12);
+}
+
+Matrix3 SurrogateEnsemble::Admissible(const Matrix3& stress_pa, bool* capped) const {
+  if (capped != nullptr) *capped = false;
+  const double limit = envelope_.tensile_limit_pa;
+  if (!std::isfinite(limit)) return stress_pa;
+  const Eigen::SelfAdjointEigenSolver<Matrix3> principal(stress_pa);
+  if (principal.eigenvalues().maxCoeff() <= limit) return stress_pa;
+  if (capped != nullptr) *capped = true;
+  const Eigen::Vector3d values = principal.eigenvalues().cwiseMin(limit);
+  return principal.eigenvectors() * values.asDiagonal() * principal.eigenvectors().transpose();
 }
 
 void SurrogateEnsemble::SetThresholds(double distance_threshold, double spread_threshold) {
@@ -205,6 +232,7 @@ void SurrogateEnsemble::Save(const std::string& directory) const {
   }
   out.Put(envelope_.largest_training_distance);
   out.Put(envelope_.stress_floor_pa);
+  out.Put(envelope_.tensile_limit_pa);
   out.Put(distance_threshold_);
   out.Put(spread_threshold_);
   const std::string path = (std::filesystem::path(directory) / "envelope.bin").string();
@@ -225,7 +253,8 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
   SurrogateEnsemble ensemble;
   try {
     ByteReader in(bytes);
-    in.ExpectTag(kEnvelopeTag);
+    const bool without_cap = bytes.compare(0, 8, kEnvelopeTagWithoutCap) == 0;
+    in.ExpectTag(without_cap ? kEnvelopeTagWithoutCap : kEnvelopeTag);
     std::uint64_t members = 0;
     in.Get(members);
     if (members < 3 || members > 64) throw InputError("model", "implausible member count");
@@ -238,6 +267,8 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
     }
     in.Get(ensemble.envelope_.largest_training_distance);
     in.Get(ensemble.envelope_.stress_floor_pa);
+    ensemble.envelope_.tensile_limit_pa = std::numeric_limits<double>::infinity();
+    if (!without_cap) in.Get(ensemble.envelope_.tensile_limit_pa);
     in.Get(ensemble.distance_threshold_);
     in.Get(ensemble.spread_threshold_);
     if (!in.AtEnd()) throw InputError("model", "trailing bytes in envelope.bin");
@@ -257,7 +288,7 @@ std::vector<Vector6> Replay(const SurrogateEnsemble& ensemble, const StrainHisto
       [&](const SurrogateInput& input) {
         return ensemble.Answer({input}, false)[0].stress_increment_pa;
       },
-      history);
+      history, [&](const Matrix3& stress_pa) { return ensemble.Admissible(stress_pa); });
 }
 
 double ReplayError(const SurrogateEnsemble& ensemble, const StrainHistory& history) {

@@ -16,6 +16,15 @@
 //     disagree by a few Pa, which is nothing, not a large fraction of nothing.
 // Both thresholds can be set; the ensemble only flags, the material (ann_material.h) decides
 // what a flag does.
+//
+// Admissible stresses: a stress the ensemble's answers build (sigma_{n+1} = R sigma_n R^T +
+// d_sigma) is capped, principal stress by principal stress, at the most tensile principal stress
+// of the training data, and at no less than zero (a point that has lost every contact carries
+// nothing). For a DE RVE of cohesionless grains that cap is zero: contacts only push, so the
+// packing carries no tension, and a network left alone does answer tension (up to 36 kPa at
+// points near the surface of the fe-ann tier's test rig, where the RVEs' stresses stay near
+// zero), which stiffens the soil. A soil whose data carries tension (a cohesive continuum) keeps
+// it up to what the data showed.
 #pragma once
 
 #include <string>
@@ -34,6 +43,9 @@ struct InputEnvelope {
   Eigen::MatrixXd inverse_covariance;
   double largest_training_distance = 0;
   double stress_floor_pa = 1;  // s_0 above
+  // The cap on principal stresses (tension positive, Pa): the largest principal stress of the
+  // training stresses, at least 0; infinite for an envelope saved before the cap existed.
+  double tensile_limit_pa = 0;
   // Mahalanobis distance of one input from the training inputs.
   double Distance(const SurrogateInput& input) const;
 };
@@ -75,6 +87,10 @@ class SurrogateEnsemble {
   std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
                                      bool want_tangent) const;
 
+  // `stress_pa` with every principal stress above envelope().tensile_limit_pa brought down to it
+  // (eigenvectors kept); `capped` (if given) says whether any was.
+  Matrix3 Admissible(const Matrix3& stress_pa, bool* capped = nullptr) const;
+
   double distance_threshold() const { return distance_threshold_; }
   double spread_threshold() const { return spread_threshold_; }
   // Throws InputError(field, ...) for a threshold that is not positive.
@@ -84,7 +100,7 @@ class SurrogateEnsemble {
   const StressSurrogate& member(std::size_t k) const { return members_.at(k); }
 
   // A directory: member_<k>.pt (TorchScript, each loadable alone) and envelope.bin (the envelope
-  // and thresholds, tagged little-endian doubles). Load throws InputError("model", ...) for a
+  // and thresholds, tagged little-endian doubles; GNGENV02, and GNGENV01 read with no cap). Load throws InputError("model", ...) for a
   // directory that does not hold a whole ensemble.
   void Save(const std::string& directory) const;
   static SurrogateEnsemble Load(const std::string& directory);
@@ -99,7 +115,8 @@ class SurrogateEnsemble {
   double spread_threshold_ = 0;
 };
 
-// The ensemble's mean run along a history (Replay of stress_surrogate.h), and its error.
+// The ensemble's mean run along a history (Replay of stress_surrogate.h), its stresses kept
+// admissible as an FE point's are (AnnMaterial), and its error.
 std::vector<Vector6> Replay(const SurrogateEnsemble& ensemble, const StrainHistory& history);
 double ReplayError(const SurrogateEnsemble& ensemble, const StrainHistory& history);
 

@@ -41,6 +41,7 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "samples = " << r.samples << "\n"
       << "distance_threshold = " << Number(r.distance_threshold) << "\n"
       << "spread_threshold = " << Number(r.spread_threshold) << "\n"
+      << "tensile_limit_pa = " << Number(r.tensile_limit_pa) << "\n"
       << "worst_held_out_error = " << Number(r.worst_held_out_error) << "\n"
       << "training_seconds = " << Number(r.training_seconds) << "\n"
       << "from_model = " << r.from_model << "\n"
@@ -82,6 +83,9 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
     r.samples = std::stoll(values.at("samples"));
     r.distance_threshold = std::stod(values.at("distance_threshold"));
     r.spread_threshold = std::stod(values.at("spread_threshold"));
+    if (values.count("tensile_limit_pa") != 0) {  // absent before the cap: none
+      r.tensile_limit_pa = std::stod(values.at("tensile_limit_pa"));
+    }
     r.worst_held_out_error = std::stod(values.at("worst_held_out_error"));
     r.training_seconds = std::stod(values.at("training_seconds"));
     r.from_model = values.at("from_model");

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,8 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   std::int64_t samples = 0;
   double distance_threshold = 0;
   double spread_threshold = 0;
+  // SurrogateEnsemble::Admissible's cap (Pa); infinite for a record made before it existed.
+  double tensile_limit_pa = std::numeric_limits<double>::infinity();
   std::vector<HeldOutResult> held_out;
   double worst_held_out_error = 0;
   double training_seconds = 0;

@@ -184,12 +184,12 @@ int main(int argc, char** argv) {
     const double rest_s =
         ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
     std::printf("fe-ann curve: %.2f s wall (%.1fx%s): network %.2f s (%lld point updates, %.1f us "
-                "each), fallbacks %d in %.2f s, model load %.3f s, FE and contact %.2f s; peak "
-                "RSS %.0f MB\n",
+                "each; %lld answers capped at the model's tensile limit), fallbacks %d in %.2f s, "
+                "model load %.3f s, FE and contact %.2f s; peak RSS %.0f MB\n",
                 ann_s, de_s / ann_s, fe_de_budget_s > 0 ? " of the projection" : "",
                 ann.network_seconds, static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
-                ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
+                static_cast<long long>(ann.tension_caps), ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
     if (fe_de_budget_s > 0) {
       std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
                   "sinkage_m\n");

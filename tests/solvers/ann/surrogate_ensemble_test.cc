@@ -4,7 +4,12 @@
 // material (ann_material.h) on the same ensemble, falling back to the Drucker-Prager model itself.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 
 #include <unistd.h>
@@ -130,6 +135,61 @@ TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
   }
   EXPECT_THROW(SurrogateEnsemble::Train(TrainingPaths(), MlpArchitecture{}, TrainingOptions{}, 2),
                InputError);
+}
+
+// The cap on principal stresses is the training data's most tensile principal stress (at least
+// zero); a stress beyond it keeps its principal directions and its other principal values; the
+// cap is saved, and an envelope saved before the cap existed (GNGENV01) loads with none.
+TEST(SurrogateEnsemble, CapsPrincipalStressesAtTheTrainingDataMostTensile) {
+  const SurrogateEnsemble& ensemble = Trained();
+  double most_tensile = 0;
+  for (const StrainHistory& history : TrainingPaths()) {
+    for (const Vector6& stress : history.stresses_pa) {
+      const Eigen::SelfAdjointEigenSolver<Matrix3> principal(material::VoigtToStress(stress));
+      most_tensile = std::max(most_tensile, principal.eigenvalues().maxCoeff());
+    }
+  }
+  const double limit = ensemble.envelope().tensile_limit_pa;
+  std::cout << "  tensile limit " << limit << " Pa (Drucker-Prager, c 1 kPa, phi 35 deg)\n";
+  EXPECT_EQ(limit, most_tensile);
+
+  const Matrix3 rotation =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d principal_values(-20e3, -10e3, limit + 5e3);
+  const Matrix3 tensile = rotation * principal_values.asDiagonal() * rotation.transpose();
+  bool capped = false;
+  const Matrix3 admissible = ensemble.Admissible(tensile, &capped);
+  EXPECT_TRUE(capped);
+  const Eigen::Vector3d expected(-20e3, -10e3, limit);
+  EXPECT_LT((admissible - rotation * expected.asDiagonal() * rotation.transpose()).norm(), 1e-8)
+      << admissible;
+  const Matrix3 compressive = rotation * Eigen::Vector3d(-20e3, -10e3, -1).asDiagonal() *
+                              rotation.transpose();
+  EXPECT_EQ(ensemble.Admissible(compressive, &capped), compressive);
+  EXPECT_FALSE(capped);
+
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() /
+                                          ("gonogo_ensemble_cap_" + std::to_string(getpid()));
+  ensemble.Save(directory.string());
+  EXPECT_EQ(SurrogateEnsemble::Load(directory.string()).envelope().tensile_limit_pa, limit);
+  // The same file as the format before the cap wrote it: older tag, no cap among the last
+  // doubles (cap, distance threshold, spread threshold).
+  const std::filesystem::path envelope = directory / "envelope.bin";
+  std::string bytes;
+  {
+    std::ifstream in(envelope, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_EQ(bytes.compare(0, 8, "GNGENV02"), 0);
+  bytes.replace(0, 8, "GNGENV01");
+  bytes.erase(bytes.size() - 24, 8);
+  std::ofstream(envelope, std::ios::binary | std::ios::trunc) << bytes;
+  const SurrogateEnsemble older = SurrogateEnsemble::Load(directory.string());
+  EXPECT_TRUE(std::isinf(older.envelope().tensile_limit_pa));
+  EXPECT_EQ(older.distance_threshold(), ensemble.distance_threshold());
+  EXPECT_EQ(older.spread_threshold(), ensemble.spread_threshold());
+  EXPECT_EQ(older.Admissible(tensile), tensile);
+  std::filesystem::remove_all(directory);
 }
 
 std::shared_ptr<const material::DruckerPrager> SharedSoil() {

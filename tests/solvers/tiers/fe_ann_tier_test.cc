@@ -173,10 +173,10 @@ TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
 }
 
 // The network answers every point of every FE step (nothing leaves its envelope) at a fraction of
-// the RVEs' cost, and its curve is compared with fe-de's. The target, 5 % of W and of rW,
-// is not reached by a model trained on laboratory paths alone (solvers/ann/README.md: measured 9.1
-// and 11.6 %); the bounds below hold what is reached (training is seeded and single-threaded, the
-// paths deterministic), so that a change that loses accuracy fails here.
+// the RVEs' cost, and its curve is within the target of fe-de's: 5 % of W and of rW at
+// every slip (training is seeded and single-threaded, the paths deterministic). Without the
+// ensemble's tensile cap (SurrogateEnsemble::Admissible) the same model was 9.1 % of W and 11.6 %
+// of rW off (solvers/ann/README.md): the cap is what this test holds.
 TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
   const FeAnnTier tier(Options(), *models_);
   const auto start = std::chrono::steady_clock::now();
@@ -187,7 +187,8 @@ TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
   EXPECT_EQ(report.model_id, "test-model");
   std::cout << "  fe-ann curve: " << seconds << " s (fe-de " << fe_de_seconds_ << " s, "
             << fe_de_seconds_ / seconds << "x); network " << report.network_seconds << " s for "
-            << report.network_point_updates << " point updates, fallbacks "
+            << report.network_point_updates << " point updates (" << report.tension_caps
+            << " capped at the tensile limit), fallbacks "
             << report.fallbacks << ", " << report.fallback_seconds
             << " s, model load " << report.model_load_seconds << " s\n";
   for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
@@ -209,8 +210,9 @@ TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
   EXPECT_GE(report.network_point_updates, point_steps);
   EXPECT_LE(report.network_point_updates, point_steps + 4);
   EXPECT_GT(fe_de_seconds_ / seconds, 4.0) << "the network is not cheaper than the RVEs";
-  EXPECT_LT(worst_pull, 0.15);
-  EXPECT_LT(worst_torque, 0.15);
+  EXPECT_GT(report.tension_caps, 0) << "no answer reached the tensile limit: the cap is untested";
+  EXPECT_LT(worst_pull, 0.05);
+  EXPECT_LT(worst_torque, 0.05);
   EXPECT_LT(worst_sinkage, 0.05);
 }
 
