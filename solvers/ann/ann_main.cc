@@ -307,6 +307,17 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   }
 }
 
+// The mean stress p (compression positive) and the deviatoric stress q (von Mises) of a
+// tension-positive Cauchy stress, Pa.
+struct MeanAndDeviatoric {
+  double p = 0, q = 0;
+};
+MeanAndDeviatoric StressInvariants(const Matrix3& sigma) {
+  const double p = -sigma.trace() / 3;
+  const Matrix3 deviator = sigma + p * Matrix3::Identity();
+  return {p, std::sqrt(1.5 * deviator.squaredNorm())};
+}
+
 // The RVE at rest: settled isotropically at `line.rest_kpa`, optionally compressed along z by
 // `line.rest_axial_strain` with the lateral strains held (oedometric, in 20 increments: a
 // deviatoric load like a point's under a wheel), then `line.rest_steps` zero increments, each
@@ -342,10 +353,8 @@ int RunRestTest(const CommandLine& line, const dem::rve::RveMaterial& rve) {
   std::printf("step,p_pa,q_pa,p_change_pct,q_change_pct\n");
   double first_p = 0, first_q = 0;
   for (int step = 0; step <= line.rest_steps; ++step) {
-    const Matrix3 sigma = step_once(Matrix3::Zero(), "rest step " + std::to_string(step));
-    const double p = -sigma.trace() / 3;
-    const Matrix3 deviator = sigma + p * Matrix3::Identity();
-    const double q = std::sqrt(1.5 * deviator.squaredNorm());
+    const auto [p, q] =
+        StressInvariants(step_once(Matrix3::Zero(), "rest step " + std::to_string(step)));
     if (step == 0) first_p = p, first_q = q;
     if (step % 10 == 0 || step == line.rest_steps) {
       std::printf("%d,%.1f,%.1f,%.3f,%.3f\n", step, p, q, 100 * (p - first_p) / first_p,
@@ -387,12 +396,8 @@ int RunIncrementStudy(const CommandLine& line, const dem::rve::RveMaterial& rve)
     for (double fraction : {0.05, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0}) {
       const int step = settle + static_cast<int>(std::lround(fraction * steps)) - 1;
       if (step < 0 || step >= static_cast<int>(history.stresses_pa.size())) continue;
-      const Vector6& s = history.stresses_pa[static_cast<std::size_t>(step)];
-      const double p = -(s[0] + s[1] + s[2]) / 3;
-      const double q = std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) +
-                                        (s[1] - s[2]) * (s[1] - s[2]) +
-                                        (s[2] - s[0]) * (s[2] - s[0])) +
-                                 3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
+      const auto [p, q] = StressInvariants(
+          material::VoigtToStress(history.stresses_pa[static_cast<std::size_t>(step)]));
       std::printf("%d,%.2f,%.4f,%.1f,%.1f,%.2f\n", steps, fraction, fraction * spec.max_strain, p,
                   q, seconds);
     }
