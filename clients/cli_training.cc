@@ -35,6 +35,10 @@ void PrintModel(const v1::SurrogateModel& m) {
             << FormatNumber(m.spread_threshold()) << ", principal stresses capped at "
             << (std::isfinite(m.tensile_limit_pa()) ? FormatNumber(m.tensile_limit_pa()) + " Pa"
                                                     : std::string("nothing (an older model)"))
+            << (m.least_principal_ratio() > 0
+                    ? ", within the cone min/max principal compression >= " +
+                          FormatNumber(m.least_principal_ratio())
+                    : std::string())
             << "\n"
             << "  held out:  worst " << Percent(m.worst_held_out_error());
   for (const auto& h : m.held_out()) std::cout << "; " << h.path() << " " << Percent(h.replay_error());

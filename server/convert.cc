@@ -146,6 +146,7 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
   out.set_distance_threshold(m.distance_threshold);
   out.set_spread_threshold(m.spread_threshold);
   out.set_tensile_limit_pa(m.tensile_limit_pa);
+  out.set_least_principal_ratio(m.least_principal_ratio);
   for (const tiers::HeldOutResult& h : m.held_out) {
     v1::HeldOutError* e = out.add_held_out();
     e->set_path(h.path);

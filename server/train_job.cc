@@ -548,6 +548,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
+    record.least_principal_ratio = ensemble.envelope().least_principal_ratio;
     for (size_t k = 0; k < held_out.size(); ++k) {
       const double error = ann::ReplayError(ensemble, held_out[k]);
       record.held_out.push_back({held_out_names[k], error});

@@ -219,7 +219,7 @@ void Validate(const CommandLine& line, const std::string& model_directory,
     std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%.2f,%.2f,%.2f\n",
                 architecture.c_str(), load_n, reference.seconds, seconds,
                 reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
-                ann.fallbacks, static_cast<long long>(ann.tension_caps),
+                ann.fallbacks, static_cast<long long>(ann.stress_returns),
                 100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
                 100 * worst.sinkage_over_r);
     for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
@@ -258,8 +258,12 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000);
   std::printf("%.2f\n",
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
-  std::printf("# %s: principal stresses capped at %g Pa (the training data's most tensile)\n",
-              name.c_str(), ensemble.envelope().tensile_limit_pa);
+  const double ratio = ensemble.envelope().least_principal_ratio;
+  std::printf("# %s: principal stresses capped at %g Pa (the training data's most tensile) and "
+              "kept within the cone min/max principal compression >= %.3f (friction angle "
+              "%.1f deg)\n",
+              name.c_str(), ensemble.envelope().tensile_limit_pa, ratio,
+              std::asin((1 - ratio) / (1 + ratio)) * 180 / M_PI);
   std::fflush(stdout);
   if (!line.out.empty()) ensemble.Save(line.out + "/" + name);
   if (!line.register_data_dir.empty()) {
@@ -277,6 +281,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
+    record.least_principal_ratio = ensemble.envelope().least_principal_ratio;
     for (std::size_t k = 0; k < study.held_out.size(); ++k) {
       record.held_out.push_back({study.held_out_names[k], held_out_errors[k]});
       record.worst_held_out_error = std::max(record.worst_held_out_error, held_out_errors[k]);
@@ -301,7 +306,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                          : line.out + "/" + name;
     if (line.out.empty()) ensemble.Save(directory);
     std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
-                "fallback_s,fallbacks,capped,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+                "fallback_s,fallbacks,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
     Validate(line, directory, name, study.soil, study.references);
     if (line.out.empty()) std::filesystem::remove_all(directory);
   }

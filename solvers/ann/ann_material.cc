@@ -75,14 +75,14 @@ void FallbackLog::RecordNetworkCall(double seconds, std::int64_t points) {
   network_point_updates_ += points;
 }
 
-void FallbackLog::RecordTensionCaps(std::int64_t points) {
+void FallbackLog::RecordStressReturns(std::int64_t points) {
   std::lock_guard<std::mutex> lock(mutex_);
-  tension_caps_ += points;
+  stress_returns_ += points;
 }
 
-std::int64_t FallbackLog::tension_caps() const {
+std::int64_t FallbackLog::stress_returns() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return tension_caps_;
+  return stress_returns_;
 }
 
 void FallbackLog::RecordFallbackSeconds(double seconds) {
@@ -299,7 +299,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
   log_->RecordNetworkCall(std::chrono::duration<double>(Clock::now() - network_start).count(),
                           static_cast<std::int64_t>(inputs.size()));
   const auto fallback_start = Clock::now();
-  std::int64_t tension_caps = 0;
+  std::int64_t stress_returns = 0;
   for (std::size_t k = 0; k < on_network.size(); ++k) {
     const std::size_t i = on_network[k];
     const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
@@ -319,7 +319,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
         rotation * committed.stress_pa * rotation.transpose() +
             material::VoigtToStress(answer.stress_increment_pa),
         &capped);
-    tension_caps += capped ? 1 : 0;
+    stress_returns += capped ? 1 : 0;
     std::unique_ptr<AnnState> next = Advance(
         committed, increments[i].displacement_gradient_increment, inputs[k].strain_increment, stress);
     next->flags += answer.out_of_distribution ? 1 : 0;
@@ -349,7 +349,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       responses[i].state = std::move(next);
     }
   }
-  log_->RecordTensionCaps(tension_caps);
+  log_->RecordStressReturns(stress_returns);
   log_->RecordFallbackSeconds(std::chrono::duration<double>(Clock::now() - fallback_start).count());
   return responses;
 }

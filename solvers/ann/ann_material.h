@@ -52,13 +52,13 @@ class FallbackLog {
   void RecordFallback(const Event& event);
   void RecordUnansweredFlag();
   void RecordNetworkCall(double seconds, std::int64_t points);
-  void RecordTensionCaps(std::int64_t points);  // answers SurrogateEnsemble::Admissible capped
+  void RecordStressReturns(std::int64_t points);  // answers SurrogateEnsemble::Admissible changed
   void RecordFallbackSeconds(double seconds);  // replays and points answered by the real model
   std::vector<Event> fallbacks() const;
   std::int64_t unanswered_flags() const;
   double network_seconds() const;
   std::int64_t network_point_updates() const;  // point updates the ensemble answered
-  std::int64_t tension_caps() const;
+  std::int64_t stress_returns() const;
   double fallback_seconds() const;
 
  private:
@@ -67,7 +67,7 @@ class FallbackLog {
   std::int64_t unanswered_flags_ = 0;
   double network_seconds_ = 0;
   std::int64_t network_point_updates_ = 0;
-  std::int64_t tension_caps_ = 0;
+  std::int64_t stress_returns_ = 0;
   double fallback_seconds_ = 0;
 };
 

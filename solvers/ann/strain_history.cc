@@ -1,7 +1,9 @@
 #include "solvers/ann/strain_history.h"
 
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <stdexcept>
 
 #include "solvers/common/byte_stream.h"
@@ -165,6 +167,36 @@ void WriteHistoriesCsv(const std::string& path, const std::vector<StrainHistory>
     text += "\n";
   }
   WriteAll(path, text);
+}
+
+StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation) {
+  StrainHistory rotated = history;
+  const auto turn = [&](const Matrix3& tensor) -> Matrix3 {
+    return rotation * tensor * rotation.transpose();
+  };
+  rotated.initial_stress_pa = turn(history.initial_stress_pa);
+  for (Matrix3& increment : rotated.increments) increment = turn(increment);
+  for (Vector6& stress : rotated.stresses_pa) {
+    stress = material::StressToVoigt(turn(material::VoigtToStress(stress)));
+  }
+  return rotated;
+}
+
+std::vector<StrainHistory> WithRotatedCopies(const std::vector<StrainHistory>& histories,
+                                             int copies, std::uint64_t seed) {
+  if (copies < 0 || copies > 64) throw InputError("rotated_copies", "must be in [0, 64]");
+  std::vector<StrainHistory> augmented = histories;
+  augmented.reserve(histories.size() * static_cast<std::size_t>(copies + 1));
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int copy = 0; copy < copies; ++copy) {
+    for (const StrainHistory& history : histories) {
+      Eigen::Quaterniond turn(normal(random), normal(random), normal(random), normal(random));
+      turn.normalize();  // a normalised 4-D Gaussian: uniform on the rotations
+      augmented.push_back(Rotated(history, turn.toRotationMatrix()));
+    }
+  }
+  return augmented;
 }
 
 }  // namespace gonogo::ann

@@ -49,4 +49,19 @@ std::vector<std::string> HistoryColumns(const std::vector<std::string>& internal
 void WriteHistoriesNpy(const std::string& path, const std::vector<StrainHistory>& histories);
 void WriteHistoriesCsv(const std::string& path, const std::vector<StrainHistory>& histories);
 
+// `history` seen in a frame turned by the rotation Q: dH' = Q dH Q^T, sigma' = Q sigma Q^T (the
+// initial stress too); internal variables kept, so they must be invariants (void ratio,
+// coordination number).
+StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation);
+
+// The training set of an isotropic material augmented by its frame indifference: `histories`
+// followed by `copies` rotated copies of each, turned by rotations drawn uniformly (a normalised
+// Gaussian quaternion) from `seed`. A DE packing prepared isotropically is isotropic up to its
+// fabric's noise: the same path in another frame is another path of the same soil, so the
+// network learns answers for stresses whose principal axes are not the laboratory's, and the
+// envelope (surrogate_ensemble.h) covers them. Throws InputError("rotated_copies", ...) for
+// copies outside [0, 64].
+std::vector<StrainHistory> WithRotatedCopies(const std::vector<StrainHistory>& histories,
+                                             int copies, std::uint64_t seed);
+
 }  // namespace gonogo::ann

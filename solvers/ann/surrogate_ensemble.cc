@@ -17,8 +17,9 @@ namespace gonogo::ann {
 namespace {
 
 constexpr int kInputs = 18;
-constexpr char kEnvelopeTag[9] = "GNGENV02";
-constexpr char kEnvelopeTagWithoutCap[9] = "GNGENV01";  // read only
+constexpr char kEnvelopeTag[9] = "GNGENV03";
+constexpr char kEnvelopeTagWithoutCone[9] = "GNGENV02";  // read only: cap, no cone
+constexpr char kEnvelopeTagWithoutCap[9] = "GNGENV01";   // read only: neither
 
 Eigen::VectorXd Raw(const SurrogateInput& input) {
   Eigen::VectorXd x(kInputs);
@@ -157,6 +158,24 @@ void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory
     }
   }
   envelope_.tensile_limit_pa = most_tensile;
+  // The cone: the least ratio of least to most compressive principal stress, measured from the
+  // tensile limit, over training stresses above the stress floor (below it a packing's few
+  // contacts make any ratio: noise, not strength).
+  double least_ratio = 1;
+  const auto ratio_of = [&](const Matrix3& stress) {
+    if (stress.norm() < envelope_.stress_floor_pa) return;
+    const Eigen::Vector3d compression =
+        most_tensile -
+        Eigen::SelfAdjointEigenSolver<Matrix3>(stress, Eigen::EigenvaluesOnly).eigenvalues().array();
+    if (compression.maxCoeff() > 0) {
+      least_ratio = std::min(least_ratio, std::max(0.0, compression.minCoeff()) / compression.maxCoeff());
+    }
+  };
+  for (const StrainHistory& history : histories) {
+    ratio_of(history.initial_stress_pa);
+    for (const Vector6& stress : history.stresses_pa) ratio_of(material::VoigtToStress(stress));
+  }
+  envelope_.least_principal_ratio = least_ratio;
   distance_threshold_ = envelope_.largest_training_distance;
   spread_threshold_ = 1.0;  // no flag while the training spread is measured
   double largest_spread = 0;
@@ -171,9 +190,24 @@ Matrix3 SurrogateEnsemble::Admissible(const Matrix3& stress_pa, bool* capped) co
   const double limit = envelope_.tensile_limit_pa;
   if (!std::isfinite(limit)) return stress_pa;
   const Eigen::SelfAdjointEigenSolver<Matrix3> principal(stress_pa);
-  if (principal.eigenvalues().maxCoeff() <= limit) return stress_pa;
+  // Compressions measured from the apex (the tensile limit), the tensile cap applied.
+  Eigen::Vector3d compression = (limit - principal.eigenvalues().array()).cwiseMax(0.0);
+  bool changed = principal.eigenvalues().maxCoeff() > limit;
+  // The cone: min c / max c >= k. A radial return in the deviatoric plane at constant mean
+  // compression m: c = m + alpha (c - m) with the largest alpha in [0, 1] that satisfies it,
+  // alpha = (1 - k) m / (k d_max - d_min), d the deviator (the Mohr-Coulomb return of a
+  // cohesionless soil, whose criterion is exactly this ratio: k = (1 - sin phi) / (1 + sin phi)).
+  const double k = envelope_.least_principal_ratio;
+  const double mean = compression.mean();
+  if (k > 0 && mean > 0 && compression.minCoeff() < k * compression.maxCoeff()) {
+    const Eigen::Vector3d deviator = compression.array() - mean;
+    const double alpha = (1 - k) * mean / (k * deviator.maxCoeff() - deviator.minCoeff());
+    compression = (mean + std::clamp(alpha, 0.0, 1.0) * deviator.array()).matrix();
+    changed = true;
+  }
+  if (!changed) return stress_pa;
   if (capped != nullptr) *capped = true;
-  const Eigen::Vector3d values = principal.eigenvalues().cwiseMin(limit);
+  const Eigen::Vector3d values = (limit - compression.array()).matrix();
   return principal.eigenvectors() * values.asDiagonal() * principal.eigenvectors().transpose();
 }
 
@@ -233,6 +267,7 @@ void SurrogateEnsemble::Save(const std::string& directory) const {
   out.Put(envelope_.largest_training_distance);
   out.Put(envelope_.stress_floor_pa);
   out.Put(envelope_.tensile_limit_pa);
+  out.Put(envelope_.least_principal_ratio);
   out.Put(distance_threshold_);
   out.Put(spread_threshold_);
   const std::string path = (std::filesystem::path(directory) / "envelope.bin").string();
@@ -254,7 +289,9 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
   try {
     ByteReader in(bytes);
     const bool without_cap = bytes.compare(0, 8, kEnvelopeTagWithoutCap) == 0;
-    in.ExpectTag(without_cap ? kEnvelopeTagWithoutCap : kEnvelopeTag);
+    const bool without_cone = without_cap || bytes.compare(0, 8, kEnvelopeTagWithoutCone) == 0;
+    in.ExpectTag(without_cap ? kEnvelopeTagWithoutCap
+                             : without_cone ? kEnvelopeTagWithoutCone : kEnvelopeTag);
     std::uint64_t members = 0;
     in.Get(members);
     if (members < 3 || members > 64) throw InputError("model", "implausible member count");
@@ -269,6 +306,8 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
     in.Get(ensemble.envelope_.stress_floor_pa);
     ensemble.envelope_.tensile_limit_pa = std::numeric_limits<double>::infinity();
     if (!without_cap) in.Get(ensemble.envelope_.tensile_limit_pa);
+    ensemble.envelope_.least_principal_ratio = 0;
+    if (!without_cone) in.Get(ensemble.envelope_.least_principal_ratio);
     in.Get(ensemble.distance_threshold_);
     in.Get(ensemble.spread_threshold_);
     if (!in.AtEnd()) throw InputError("model", "trailing bytes in envelope.bin");

@@ -25,6 +25,15 @@
 // points near the surface of the fe-ann tier's test rig, where the RVEs' stresses stay near
 // zero), which stiffens the soil. A soil whose data carries tension (a cohesive continuum) keeps
 // it up to what the data showed.
+// A capped stress is still one no packing holds: with one principal stress zero and the others
+// compressive it lies beyond any friction angle, and the network, which has never seen such a
+// state, answers the next increment from outside its training data. So the stress is then
+// returned onto the cone the data spans: with c_i the principal compressions measured from the
+// tensile limit, min c / max c >= k, k the least ratio of the training stresses above the
+// stress floor. The return is radial in the deviatoric plane at constant mean compression m,
+// c <- m + alpha (c - m), alpha = min(1, (1 - k) m / (k d_max - d_min)), d = c - m: the
+// Mohr-Coulomb return of a cohesionless soil, whose criterion is this ratio,
+// k = (1 - sin phi) / (1 + sin phi).
 #pragma once
 
 #include <string>
@@ -46,6 +55,10 @@ struct InputEnvelope {
   // The cap on principal stresses (tension positive, Pa): the largest principal stress of the
   // training stresses, at least 0; infinite for an envelope saved before the cap existed.
   double tensile_limit_pa = 0;
+  // The cone: the least ratio k of least to most compressive principal stress (measured from the
+  // tensile limit) of the training stresses above stress_floor_pa; 0 (no cone) for an envelope
+  // saved before it existed.
+  double least_principal_ratio = 0;
   // Mahalanobis distance of one input from the training inputs.
   double Distance(const SurrogateInput& input) const;
 };
@@ -87,8 +100,9 @@ class SurrogateEnsemble {
   std::vector<EnsembleAnswer> Answer(const std::vector<SurrogateInput>& inputs,
                                      bool want_tangent) const;
 
-  // `stress_pa` with every principal stress above envelope().tensile_limit_pa brought down to it
-  // (eigenvectors kept); `capped` (if given) says whether any was.
+  // `stress_pa` with every principal stress above envelope().tensile_limit_pa brought down to it,
+  // then returned radially onto the cone if outside it (eigenvectors kept); `capped` (if given)
+  // says whether either changed it.
   Matrix3 Admissible(const Matrix3& stress_pa, bool* capped = nullptr) const;
 
   double distance_threshold() const { return distance_threshold_; }

@@ -34,7 +34,7 @@ FeAnnTier::FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelS
 
 std::string FeAnnTier::Version() const {
   // The fallback and the thresholds change what a model answers; the model's id is in the key.
-  std::string version = "fe-ann-2";  // 2: stresses capped at the model's tensile limit
+  std::string version = "fe-ann-3";  // 2: stresses capped at the tensile limit; 3: and the cone
   if (options_.fe_de.preset != "default") version += "-" + options_.fe_de.preset;
   if (!options_.fallback_enabled) version += "-nofallback";
   if (options_.distance_threshold > 0 || options_.spread_threshold > 0) {
@@ -153,7 +153,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     report.unanswered_flags = log.unanswered_flags();
     report.network_seconds = log.network_seconds();
     report.network_point_updates = log.network_point_updates();
-    report.tension_caps = log.tension_caps();
+    report.stress_returns = log.stress_returns();
     report.fallback_seconds = log.fallback_seconds();
   }
   return report;

@@ -67,9 +67,9 @@ struct AnnRunReport : FeDeRunReport {
   std::int64_t unanswered_flags = 0;  // with the fallback off
   double network_seconds = 0;         // the ensemble's batched calls
   std::int64_t network_point_updates = 0;
-  // Network answers whose stress was capped at the model's tensile limit
-  // (SurrogateEnsemble::Admissible), trial updates included.
-  std::int64_t tension_caps = 0;
+  // Network answers whose stress was made admissible (SurrogateEnsemble::Admissible: capped at
+  // the model's tensile limit or returned onto its cone), trial updates included.
+  std::int64_t stress_returns = 0;
   double fallback_seconds = 0;        // replays and points on the RVE
   double model_load_seconds = 0;
 };

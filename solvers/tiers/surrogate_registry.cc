@@ -42,6 +42,7 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "distance_threshold = " << Number(r.distance_threshold) << "\n"
       << "spread_threshold = " << Number(r.spread_threshold) << "\n"
       << "tensile_limit_pa = " << Number(r.tensile_limit_pa) << "\n"
+      << "least_principal_ratio = " << Number(r.least_principal_ratio) << "\n"
       << "worst_held_out_error = " << Number(r.worst_held_out_error) << "\n"
       << "training_seconds = " << Number(r.training_seconds) << "\n"
       << "from_model = " << r.from_model << "\n"
@@ -85,6 +86,9 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
     r.spread_threshold = std::stod(values.at("spread_threshold"));
     if (values.count("tensile_limit_pa") != 0) {  // absent before the cap: none
       r.tensile_limit_pa = std::stod(values.at("tensile_limit_pa"));
+    }
+    if (values.count("least_principal_ratio") != 0) {  // absent before the cone: none
+      r.least_principal_ratio = std::stod(values.at("least_principal_ratio"));
     }
     r.worst_held_out_error = std::stod(values.at("worst_held_out_error"));
     r.training_seconds = std::stod(values.at("training_seconds"));

@@ -33,6 +33,7 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   double spread_threshold = 0;
   // SurrogateEnsemble::Admissible's cap (Pa); infinite for a record made before it existed.
   double tensile_limit_pa = std::numeric_limits<double>::infinity();
+  double least_principal_ratio = 0;  // its cone; 0 (none) for a record made before it existed
   std::vector<HeldOutResult> held_out;
   double worst_held_out_error = 0;
   double training_seconds = 0;

@@ -62,6 +62,8 @@ void SurrogateRecipe::Validate(const std::string& p) const {
   Require(members >= 3 && members <= 64, p + "members", "must lie in [3, 64]");
   training.Validate(p + "training.");
   Require(threads >= 1 && threads <= 1024, p + "threads", "must lie in [1, 1024]");
+  Require(rotated_copies >= 0 && rotated_copies <= 64, p + "rotated_copies",
+          "must lie in [0, 64]");
 }
 
 std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe) {
@@ -215,8 +217,9 @@ TrainedSurrogate TrainSurrogateOnRve(
 
   if (stage) stage("training", 0);
   const auto train_start = std::chrono::steady_clock::now();
-  trained.ensemble = ann::SurrogateEnsemble::Train(trained.training, recipe.architecture,
-                                                   recipe.training, recipe.members);
+  trained.ensemble = ann::SurrogateEnsemble::Train(
+      ann::WithRotatedCopies(trained.training, recipe.rotated_copies, recipe.training.seed),
+      recipe.architecture, recipe.training, recipe.members);
   trained.training_seconds = Seconds(train_start);
   for (std::size_t k = 0; k < trained.held_out.size(); ++k) {
     const double error = ann::ReplayError(trained.ensemble, trained.held_out[k]);

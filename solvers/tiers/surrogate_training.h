@@ -33,6 +33,11 @@ struct SurrogateRecipe {
   // wheel (its surface layer starts at FeDeOptions::min_initial_pressure_pa, 2 kPa).
   std::vector<double> pressures_pa = {2.5e3, 5e3, 10e3, 20e3, 40e3, 80e3};
   double max_walk_strain = 0.01;
+  // Rotated copies of every training history (ann::WithRotatedCopies): the paths in frames other
+  // than the laboratory's, which an FE point under a wheel meets. 0: none. On the fe-ann tier's
+  // test rig 3 copies took the fallbacks from 3 to 0 but the curve from 3.9 to 7.2 % of W off
+  // fe-de's (solvers/ann/README.md), so the default is none.
+  int rotated_copies = 0;
   ann::MlpArchitecture architecture;
   int members = 3;
   ann::TrainingOptions training;  // epochs 300, batches of 64 unless set

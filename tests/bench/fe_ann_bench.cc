@@ -67,19 +67,28 @@ double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& eva
 
 int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
-  int steps = 40, walks = 12, epochs = 200, threads = 2;
-  double load_n = 1000, fe_de_budget_s = 0;
+  int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
+  double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
   app.add_option("--steps", steps, "steps per training path")->capture_default_str();
   app.add_option("--walks", walks, "random walks in the training set")->capture_default_str();
   app.add_option("--epochs", epochs, "training epochs")->capture_default_str();
+  app.add_option("--rotated-copies", rotated_copies,
+                 "rotated copies of each training path added to the training set")
+      ->capture_default_str();
   app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
       ->capture_default_str();
   app.add_option("--wheel-load-n", load_n, "the rig wheel's load, N")->capture_default_str();
   app.add_option("--fe-de-budget-s", fe_de_budget_s,
                  "> 0: run fe-de this long and project its whole time from its pace")
+      ->capture_default_str();
+  app.add_option("--distance-threshold", distance_threshold,
+                 "the fe-ann run's envelope distance threshold; 0: the model's own")
+      ->capture_default_str();
+  app.add_option("--spread-threshold", spread_threshold,
+                 "the fe-ann run's ensemble spread threshold; 0: the model's own")
       ->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads running the training paths")
       ->capture_default_str();
@@ -92,6 +101,7 @@ int main(int argc, char** argv) {
     recipe.steps = steps;
     recipe.walks = walks;
     recipe.training.epochs = epochs;
+    recipe.rotated_copies = rotated_copies;
     recipe.threads = threads;
     recipe.architecture.hidden_widths.clear();
     std::stringstream widths(architecture_text);
@@ -113,6 +123,12 @@ int main(int argc, char** argv) {
                 trained.generation_seconds, threads, trained.training_seconds,
                 static_cast<long long>(trained.samples), history_bytes / 1024.0,
                 100 * trained.worst_held_out_error, PeakRssMb());
+
+    const ann::InputEnvelope& envelope = trained.ensemble.envelope();
+    std::printf("model: distance threshold %.2f, spread threshold %.3g, tensile limit %g Pa, cone "
+                "least principal ratio %.3f; %d rotated copies of each training path\n",
+                trained.ensemble.distance_threshold(), trained.ensemble.spread_threshold(),
+                envelope.tensile_limit_pa, envelope.least_principal_ratio, rotated_copies);
 
     // The network, batched.
     std::vector<ann::SurrogateInput> pool;
@@ -149,6 +165,8 @@ int main(int argc, char** argv) {
     record.fe_de_preset = preset;
     tiers::FeAnnOptions options;
     options.fe_de = fe_de;
+    options.distance_threshold = distance_threshold;
+    options.spread_threshold = spread_threshold;
     const tiers::FeAnnTier fe_ann(options, std::make_shared<tiers::ListedSurrogateModels>(
                                                std::vector<tiers::SurrogateModelRecord>{record}));
     TractionRequest request;
@@ -184,12 +202,13 @@ int main(int argc, char** argv) {
     const double rest_s =
         ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
     std::printf("fe-ann curve: %.2f s wall (%.1fx%s): network %.2f s (%lld point updates, %.1f us "
-                "each; %lld answers capped at the model's tensile limit), fallbacks %d in %.2f s, "
+                "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s, "
                 "model load %.3f s, FE and contact %.2f s; peak RSS %.0f MB\n",
                 ann_s, de_s / ann_s, fe_de_budget_s > 0 ? " of the projection" : "",
                 ann.network_seconds, static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
-                static_cast<long long>(ann.tension_caps), ann.fallbacks, ann.fallback_seconds, ann.model_load_seconds, rest_s, PeakRssMb());
+                static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
+                ann.model_load_seconds, rest_s, PeakRssMb());
     if (fe_de_budget_s > 0) {
       std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
                   "sinkage_m\n");

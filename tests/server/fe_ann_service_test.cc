@@ -27,7 +27,7 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
 
   const CliRun tiers = Gonogo(server.endpoint(), "tiers");
   ASSERT_EQ(tiers.exit_code, 0) << tiers.out;
-  EXPECT_NE(tiers.out.find("fe-ann (fe-ann-2-tiny)"), std::string::npos) << tiers.out;
+  EXPECT_NE(tiers.out.find("fe-ann (fe-ann-3-tiny)"), std::string::npos) << tiers.out;
   const CliRun none = Gonogo(server.endpoint(), "models");
   ASSERT_EQ(none.exit_code, 0) << none.out;
   EXPECT_NE(none.out.find("no surrogate models"), std::string::npos) << none.out;

@@ -262,6 +262,78 @@ TEST(StrainHistories, RoundTripBitForBitAndRefuseDamagedBytes) {
   EXPECT_THROW(ParseHistory(foreign), InputError);
 }
 
+// Drives `model` from its initial state through `history`'s increments; the stresses after each.
+std::vector<Matrix3> Drive(const material::ConstitutiveModel& model, const StrainHistory& history) {
+  std::unique_ptr<material::MaterialState> state = model.InitialState();
+  std::vector<Matrix3> stresses;
+  for (const Matrix3& increment : history.increments) {
+    std::vector<material::PointResponse> response = model.Update({{increment, state.get()}}, false);
+    EXPECT_EQ(response[0].status, material::UpdateStatus::kOk);
+    stresses.push_back(response[0].stress_pa);
+    state = std::move(response[0].state);
+  }
+  return stresses;
+}
+
+// A rotated copy is the same path in a turned frame: a quarter turn about z swaps xx and yy and
+// turns xz into yz; an isotropic model (Drucker-Prager) driven along a copy's increments answers
+// the copy's stresses, so the copies are data of the same soil; copies are seeded, counted and
+// bounded.
+TEST(StrainHistories, RotatedCopiesAreThePathsOfTheSameIsotropicSoilInTurnedFrames) {
+  material::DruckerPragerParams params;
+  params.young_pa = 20e6;
+  params.poisson = 0.3;
+  params.cohesion_pa = 1e3;
+  params.friction_angle_deg = 35;
+  params.dilation_angle_deg = 5;
+  const material::DruckerPrager soil(params);
+  LabPathSpec spec;
+  spec.path = LabPath::kSimpleShear;
+  spec.pressure_pa = 20e3;
+  spec.max_strain = 0.02;
+  spec.steps = 30;
+  const StrainHistory shear = RunLabPath(soil, spec);
+  ASSERT_TRUE(shear.stopped_reason.empty()) << shear.stopped_reason;
+
+  Matrix3 quarter_turn;
+  quarter_turn << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  const StrainHistory turned = Rotated(shear, quarter_turn);
+  const Vector6& last = shear.stresses_pa.back();       // xx yy zz yz xz xy
+  const Vector6& last_turned = turned.stresses_pa.back();
+  EXPECT_DOUBLE_EQ(last_turned[0], last[1]);
+  EXPECT_DOUBLE_EQ(last_turned[1], last[0]);
+  EXPECT_DOUBLE_EQ(last_turned[2], last[2]);
+  EXPECT_DOUBLE_EQ(last_turned[3], last[4]);  // yz' = xz
+  EXPECT_NEAR(last_turned[4], 0, 1e-9 * std::abs(last[4]));
+
+  const std::vector<StrainHistory> copies = WithRotatedCopies({shear}, 2, 7);
+  ASSERT_EQ(copies.size(), 3u);
+  EXPECT_EQ(SerializeHistory(copies[0]), SerializeHistory(shear));
+  EXPECT_EQ(SerializeHistory(WithRotatedCopies({shear}, 2, 7)[2]), SerializeHistory(copies[2]));
+  EXPECT_NE(SerializeHistory(WithRotatedCopies({shear}, 2, 8)[2]), SerializeHistory(copies[2]));
+  for (const StrainHistory& copy : {copies[1], copies[2]}) {
+    const std::vector<Matrix3> driven = Drive(soil, copy);
+    ASSERT_EQ(driven.size(), copy.stresses_pa.size());
+    double worst = 0;
+    for (std::size_t k = 0; k < driven.size(); ++k) {
+      worst = std::max(worst, (driven[k] - material::VoigtToStress(copy.stresses_pa[k])).norm());
+    }
+    EXPECT_LT(worst, 1e-6 * material::VoigtToStress(last).norm())
+        << "the soil's answer to the turned path is not the turned answer";
+    EXPECT_GT((material::VoigtToStress(copy.stresses_pa.back()) - material::VoigtToStress(last))
+                  .norm(),
+              0.01 * material::VoigtToStress(last).norm())
+        << "the copy was not turned";
+  }
+  EXPECT_EQ(WithRotatedCopies({shear}, 0, 7).size(), 1u);
+  try {
+    WithRotatedCopies({shear}, 65, 7);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "rotated_copies");
+  }
+}
+
 std::string Slurp(const std::string& path) {
   std::ifstream in(path);
   std::stringstream text;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -137,10 +138,21 @@ TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
                InputError);
 }
 
+// Principal compressions of `stress` (tension positive) measured from the apex `limit`, sorted.
+Eigen::Vector3d CompressionsFrom(double limit, const Matrix3& stress) {
+  Eigen::Vector3d compression =
+      limit - Eigen::SelfAdjointEigenSolver<Matrix3>(stress).eigenvalues().array();
+  std::sort(compression.data(), compression.data() + 3);
+  return compression;
+}
+
 // The cap on principal stresses is the training data's most tensile principal stress (at least
-// zero); a stress beyond it keeps its principal directions and its other principal values; the
-// cap is saved, and an envelope saved before the cap existed (GNGENV01) loads with none.
-TEST(SurrogateEnsemble, CapsPrincipalStressesAtTheTrainingDataMostTensile) {
+// zero), and the cone the least ratio of least to most principal compression (from that apex) of
+// the training stresses above the stress floor. A stress beyond the cap is capped and then, like
+// a compressive stress outside the cone, returned onto it at its mean compression, keeping its
+// principal directions; a stress inside both is left alone. Both are saved; an envelope saved
+// before the cone (GNGENV02) loads with the cap only, one before the cap (GNGENV01) with neither.
+TEST(SurrogateEnsemble, CapsTensionAndReturnsStressesOntoTheTrainingDataCone) {
   const SurrogateEnsemble& ensemble = Trained();
   double most_tensile = 0;
   for (const StrainHistory& history : TrainingPaths()) {
@@ -150,45 +162,86 @@ TEST(SurrogateEnsemble, CapsPrincipalStressesAtTheTrainingDataMostTensile) {
     }
   }
   const double limit = ensemble.envelope().tensile_limit_pa;
-  std::cout << "  tensile limit " << limit << " Pa (Drucker-Prager, c 1 kPa, phi 35 deg)\n";
   EXPECT_EQ(limit, most_tensile);
+  double least_ratio = 1;
+  for (const StrainHistory& history : TrainingPaths()) {
+    for (const Vector6& voigt : history.stresses_pa) {
+      const Matrix3 stress = material::VoigtToStress(voigt);
+      if (stress.norm() < ensemble.envelope().stress_floor_pa) continue;
+      const Eigen::Vector3d c = CompressionsFrom(limit, stress);
+      least_ratio = std::min(least_ratio, std::max(0.0, c[0]) / c[2]);
+    }
+  }
+  const double k = ensemble.envelope().least_principal_ratio;
+  std::cout << "  tensile limit " << limit << " Pa, cone ratio " << k << " (friction angle "
+            << std::asin((1 - k) / (1 + k)) * 180 / M_PI
+            << " deg; Drucker-Prager data, c 1 kPa, phi 35 deg)\n";
+  EXPECT_NEAR(k, least_ratio, 1e-12);
+  // Wider than the soil's 35 deg (0.27): the ratios are measured from the tensile limit (1.2 kPa),
+  // not from the Drucker-Prager cone's apex (c cot phi = 1.4 kPa), and stresses near it have
+  // small ones. Still a cone, which the returns below tell from the cap alone.
+  ASSERT_GT(k, 0.01);
 
   const Matrix3 rotation =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
-  const Eigen::Vector3d principal_values(-20e3, -10e3, limit + 5e3);
-  const Matrix3 tensile = rotation * principal_values.asDiagonal() * rotation.transpose();
+  const auto rotated = [&](const Eigen::Vector3d& values) -> Matrix3 {
+    return rotation * values.asDiagonal() * rotation.transpose();
+  };
+  const auto expect_on_cone = [&](const Matrix3& admissible, const Eigen::Vector3d& mean_of) {
+    const Matrix3 principal_frame = rotation.transpose() * admissible * rotation;
+    EXPECT_LT((principal_frame - Matrix3(principal_frame.diagonal().asDiagonal())).norm(), 1e-6)
+        << "principal directions changed:\n" << principal_frame;
+    const Eigen::Vector3d c = CompressionsFrom(limit, admissible);
+    EXPECT_NEAR(c[0] / c[2], k, 1e-9);
+    EXPECT_NEAR(c.mean(), mean_of.mean(), 1e-6);
+  };
   bool capped = false;
+  // Tension: capped at the limit (compressions 20 kPa + t, 10 kPa + t, 0), then on the cone.
+  const Matrix3 tensile = rotated({-20e3, -10e3, limit + 5e3});
   const Matrix3 admissible = ensemble.Admissible(tensile, &capped);
   EXPECT_TRUE(capped);
-  const Eigen::Vector3d expected(-20e3, -10e3, limit);
-  EXPECT_LT((admissible - rotation * expected.asDiagonal() * rotation.transpose()).norm(), 1e-8)
-      << admissible;
-  const Matrix3 compressive = rotation * Eigen::Vector3d(-20e3, -10e3, -1).asDiagonal() *
-                              rotation.transpose();
-  EXPECT_EQ(ensemble.Admissible(compressive, &capped), compressive);
+  expect_on_cone(admissible, Eigen::Vector3d(20e3 + limit, 10e3 + limit, 0));
+  // Compressive but more deviatoric than any training stress.
+  const Matrix3 sheared = rotated({limit - 20e3, limit - 10e3, limit - 0.5 * k * 20e3});
+  EXPECT_LT(CompressionsFrom(limit, sheared)[0] / CompressionsFrom(limit, sheared)[2], k);
+  expect_on_cone(ensemble.Admissible(sheared, &capped), CompressionsFrom(limit, sheared));
+  EXPECT_TRUE(capped);
+  const Matrix3 inside = rotated({-20e3, -15e3, -12e3});
+  EXPECT_EQ(ensemble.Admissible(inside, &capped), inside);
   EXPECT_FALSE(capped);
 
   const std::filesystem::path directory = std::filesystem::temp_directory_path() /
                                           ("gonogo_ensemble_cap_" + std::to_string(getpid()));
   ensemble.Save(directory.string());
   EXPECT_EQ(SurrogateEnsemble::Load(directory.string()).envelope().tensile_limit_pa, limit);
-  // The same file as the format before the cap wrote it: older tag, no cap among the last
-  // doubles (cap, distance threshold, spread threshold).
+  EXPECT_EQ(SurrogateEnsemble::Load(directory.string()).envelope().least_principal_ratio, k);
+  // The same file as the formats before wrote it: older tag, and the cone (then the cap too)
+  // gone from the last doubles (cap, cone, distance threshold, spread threshold).
   const std::filesystem::path envelope = directory / "envelope.bin";
   std::string bytes;
   {
     std::ifstream in(envelope, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
-  ASSERT_EQ(bytes.compare(0, 8, "GNGENV02"), 0);
-  bytes.replace(0, 8, "GNGENV01");
-  bytes.erase(bytes.size() - 24, 8);
-  std::ofstream(envelope, std::ios::binary | std::ios::trunc) << bytes;
-  const SurrogateEnsemble older = SurrogateEnsemble::Load(directory.string());
-  EXPECT_TRUE(std::isinf(older.envelope().tensile_limit_pa));
-  EXPECT_EQ(older.distance_threshold(), ensemble.distance_threshold());
-  EXPECT_EQ(older.spread_threshold(), ensemble.spread_threshold());
-  EXPECT_EQ(older.Admissible(tensile), tensile);
+  ASSERT_EQ(bytes.compare(0, 8, "GNGENV03"), 0);
+  const auto older_format = [&](const char* tag, std::size_t dropped_doubles) {
+    std::string older = bytes;
+    older.replace(0, 8, tag);
+    older.erase(older.size() - 16 - 8 * dropped_doubles, 8 * dropped_doubles);
+    std::ofstream(envelope, std::ios::binary | std::ios::trunc) << older;
+    SurrogateEnsemble loaded = SurrogateEnsemble::Load(directory.string());
+    EXPECT_EQ(loaded.distance_threshold(), ensemble.distance_threshold()) << tag;
+    EXPECT_EQ(loaded.spread_threshold(), ensemble.spread_threshold()) << tag;
+    return loaded;
+  };
+  const SurrogateEnsemble without_cone = older_format("GNGENV02", 1);
+  EXPECT_EQ(without_cone.envelope().tensile_limit_pa, limit);
+  EXPECT_EQ(without_cone.envelope().least_principal_ratio, 0);
+  EXPECT_LT((without_cone.Admissible(tensile) - rotated({-20e3, -10e3, limit})).norm(), 1e-8);
+  EXPECT_EQ(without_cone.Admissible(sheared), sheared);
+  const SurrogateEnsemble without_cap = older_format("GNGENV01", 2);
+  EXPECT_TRUE(std::isinf(without_cap.envelope().tensile_limit_pa));
+  EXPECT_EQ(without_cap.Admissible(tensile), tensile);
   std::filesystem::remove_all(directory);
 }
 

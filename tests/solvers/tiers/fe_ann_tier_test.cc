@@ -172,12 +172,14 @@ TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
   EXPECT_EQ(report.curve.tier, "fe-ann");
 }
 
-// The network answers every point of every FE step (nothing leaves its envelope) at a fraction of
-// the RVEs' cost, and its curve is within the target of fe-de's: 5 % of W and of rW at
-// every slip (training is seeded and single-threaded, the paths deterministic). Without the
-// ensemble's tensile cap (SurrogateEnsemble::Admissible) the same model was 9.1 % of W and 11.6 %
-// of rW off (solvers/ann/README.md): the cap is what this test holds.
-TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
+// The network answers the points of every FE step, all but a few that leave its envelope under
+// the wheel (those fall back to their RVEs), at a fraction of the RVEs' cost, and its curve is
+// within the target of fe-de's: 5 % of W and of rW at every slip (training is seeded and
+// single-threaded, the paths deterministic). Without the ensemble's admissible stresses
+// (SurrogateEnsemble::Admissible) the same model was 9.1 % of W and 11.6 % of rW off; with the
+// tensile cap alone 4.7 and 4.8 % (solvers/ann/README.md): the cap and the cone are what this
+// test holds.
+TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeDe) {
   const FeAnnTier tier(Options(), *models_);
   const auto start = std::chrono::steady_clock::now();
   const AnnRunReport report = tier.Run(Request(), {});
@@ -187,8 +189,8 @@ TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
   EXPECT_EQ(report.model_id, "test-model");
   std::cout << "  fe-ann curve: " << seconds << " s (fe-de " << fe_de_seconds_ << " s, "
             << fe_de_seconds_ / seconds << "x); network " << report.network_seconds << " s for "
-            << report.network_point_updates << " point updates (" << report.tension_caps
-            << " capped at the tensile limit), fallbacks "
+            << report.network_point_updates << " point updates (" << report.stress_returns
+            << " capped or returned onto the cone), fallbacks "
             << report.fallbacks << ", " << report.fallback_seconds
             << " s, model load " << report.model_load_seconds << " s\n";
   for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
@@ -204,13 +206,16 @@ TEST_F(FeAnnTierTest, NetworkAnswersEveryPointAndItsCurveIsComparedWithFeDe) {
   const double worst_sinkage = worst.sinkage_over_r;
   std::cout << "  worst: D " << 100 * worst_pull << " % of W, T " << 100 * worst_torque
             << " % of rW, z " << 100 * worst_sinkage << " % of r\n";
-  EXPECT_EQ(report.fallbacks, 0);
-  // Every point at every FE step (and the bin's start, which asks a point or two more).
+  EXPECT_LE(report.fallbacks, report.elements / 32) << "more than a few points left the envelope";
+  // Every point at every FE step, less the steps of fallen-back points after their fallback (and
+  // the bin's start, which asks a point or two more).
   const std::int64_t point_steps = static_cast<std::int64_t>(report.elements) * report.fe_steps;
-  EXPECT_GE(report.network_point_updates, point_steps);
-  EXPECT_LE(report.network_point_updates, point_steps + 4);
+  std::int64_t steps_on_rves = 0;
+  for (std::int64_t step : report.fallback_steps) steps_on_rves += report.fe_steps - step;
+  EXPECT_NEAR(static_cast<double>(report.network_point_updates),
+              static_cast<double>(point_steps - steps_on_rves), 4.0 + 2 * report.fallbacks);
   EXPECT_GT(fe_de_seconds_ / seconds, 4.0) << "the network is not cheaper than the RVEs";
-  EXPECT_GT(report.tension_caps, 0) << "no answer reached the tensile limit: the cap is untested";
+  EXPECT_GT(report.stress_returns, 0) << "no answer was made admissible: the cap and cone are untested";
   EXPECT_LT(worst_pull, 0.05);
   EXPECT_LT(worst_torque, 0.05);
   EXPECT_LT(worst_sinkage, 0.05);

@@ -44,6 +44,7 @@ RegisteredSurrogate Record(const std::string& id, const std::string& soil, doubl
   r.distance_threshold = 12.5;
   r.spread_threshold = 0.04;
   r.tensile_limit_pa = 12.0;
+  r.least_principal_ratio = 0.25;
   r.held_out = {{"triaxial 14.1 kPa", worst_error / 2}, {"rig point 1", worst_error}};
   r.worst_held_out_error = worst_error;
   r.training_seconds = 1.5;
@@ -78,6 +79,7 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(described->samples, 60);
   EXPECT_EQ(described->distance_threshold, 12.5);
   EXPECT_EQ(described->tensile_limit_pa, 12.0);
+  EXPECT_EQ(described->least_principal_ratio, 0.25);
   ASSERT_EQ(described->held_out.size(), 2u);
   EXPECT_EQ(described->held_out[0].path, "triaxial 14.1 kPa");
   EXPECT_EQ(described->held_out[1].replay_error, 0.05);
