@@ -21,6 +21,7 @@
 #include "solvers/dem/rve/rve_soil.h"
 #include "solvers/material/drucker_prager.h"
 #include "solvers/material/linear_elastic.h"
+#include "tests/solvers/ann/drucker_prager_paths.h"
 
 namespace gonogo::ann {
 namespace {
@@ -280,13 +281,7 @@ std::vector<Matrix3> Drive(const material::ConstitutiveModel& model, const Strai
 // the copy's stresses, so the copies are data of the same soil; copies are seeded, counted and
 // bounded.
 TEST(StrainHistories, RotatedCopiesAreThePathsOfTheSameIsotropicSoilInTurnedFrames) {
-  material::DruckerPragerParams params;
-  params.young_pa = 20e6;
-  params.poisson = 0.3;
-  params.cohesion_pa = 1e3;
-  params.friction_angle_deg = 35;
-  params.dilation_angle_deg = 5;
-  const material::DruckerPrager soil(params);
+  const material::DruckerPrager& soil = testing::Soil();
   LabPathSpec spec;
   spec.path = LabPath::kSimpleShear;
   spec.pressure_pa = 20e3;
