@@ -111,6 +111,12 @@ const std::vector<std::string>& Migrations() {
       );
       CREATE INDEX rve_histories_by_dataset ON rve_histories (dataset, id);
       )sql",
+      // 6 -> 7: every job belongs to the identity that submitted it (server/identity.h); jobs
+      // stored before belong to the local identity, the only one there was.
+      R"sql(
+      ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT 'local';
+      CREATE INDEX jobs_by_owner ON jobs (owner, created_unix_ms);
+      )sql",
   };
   return kMigrations;
 }

@@ -8,7 +8,7 @@ namespace {
 
 constexpr char kColumns[] =
     "id, name, tier, state, fraction_done, tasks_done, tasks_total, cache_hits, message, request, "
-    "summary_json, products, created_unix_ms, finished_unix_ms, similarity_hits, kind";
+    "summary_json, products, created_unix_ms, finished_unix_ms, similarity_hits, kind, owner";
 
 std::string JoinProducts(const std::vector<std::string>& products) {
   std::string out;
@@ -37,6 +37,7 @@ JobRecord ReadRow(const Statement& s) {
   j.finished_unix_ms = s.Int(13);
   j.similarity_hits = s.Int(14);
   j.kind = s.Text(15);
+  j.owner = s.Text(16);
   return j;
 }
 
@@ -60,11 +61,11 @@ const char* JobStateName(JobState s) {
 void JobStore::Create(const JobRecord& j) {
   WriteTransaction tx(db_);
   Statement s = db_.Prepare(
-      "INSERT INTO jobs (id, name, tier, state, message, request, created_unix_ms, kind) "
-      "VALUES (?,?,?,?,?,?,?,?)");
+      "INSERT INTO jobs (id, name, tier, state, message, request, created_unix_ms, kind, owner) "
+      "VALUES (?,?,?,?,?,?,?,?,?)");
   s.Bind(1, j.id).Bind(2, j.name).Bind(3, j.tier).Bind(4, static_cast<int64_t>(j.state));
   s.Bind(5, j.message).BindBlob(6, j.request.data(), j.request.size()).Bind(7, j.created_unix_ms);
-  s.Bind(8, j.kind);
+  s.Bind(8, j.kind).Bind(9, j.owner);
   s.Run();
   tx.Commit();
 }
@@ -77,11 +78,14 @@ std::optional<JobRecord> JobStore::Get(const std::string& id) {
   return ReadRow(s);
 }
 
-std::vector<JobRecord> JobStore::List(int limit) {
+std::vector<JobRecord> JobStore::List(int limit, const std::string& owner) {
   std::lock_guard<std::recursive_mutex> lock(db_.mutex());
-  Statement s = db_.Prepare(std::string("SELECT ") + kColumns +
-                            " FROM jobs ORDER BY created_unix_ms DESC, rowid DESC LIMIT ?");
-  s.Bind(1, static_cast<int64_t>(limit));
+  Statement s = db_.Prepare(std::string("SELECT ") + kColumns + " FROM jobs" +
+                            (owner.empty() ? "" : " WHERE owner = ?") +
+                            " ORDER BY created_unix_ms DESC, rowid DESC LIMIT ?");
+  int next = 1;
+  if (!owner.empty()) s.Bind(next++, owner);
+  s.Bind(next, static_cast<int64_t>(limit));
   std::vector<JobRecord> jobs;
   while (s.Step()) jobs.push_back(ReadRow(s));
   return jobs;

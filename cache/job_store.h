@@ -24,6 +24,7 @@ inline constexpr char kTrainJob[] = "train";  // request: a serialised TrainSurr
 struct JobRecord {
   std::string id;
   std::string kind = kMapJob;
+  std::string owner = "local";  // the identity that submitted it (server/identity.h)
   std::string name;
   std::string tier;
   JobState state = JobState::kQueued;
@@ -55,8 +56,8 @@ class JobStore {
 
   void Create(const JobRecord& job);
   std::optional<JobRecord> Get(const std::string& id);
-  // Newest first.
-  std::vector<JobRecord> List(int limit);
+  // Newest first; with a non-empty `owner`, that identity's jobs only.
+  std::vector<JobRecord> List(int limit, const std::string& owner = "");
   // Jobs a restarted server must resume, oldest first.
   std::vector<JobRecord> Unfinished();
   void SetState(const std::string& id, JobState state, const std::string& message);

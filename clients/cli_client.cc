@@ -9,6 +9,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "clients/bearer_token.h"
+
 namespace gonogo::cli {
 namespace {
 
@@ -108,9 +110,44 @@ const char* StateName(v1::JobState s) {
   }
 }
 
-Client::Client(const std::string& endpoint)
-    : stub_(v1::MobilityService::NewStub(
-          grpc::CreateChannel(endpoint, grpc::InsecureChannelCredentials()))) {}
+namespace {
+
+std::shared_ptr<grpc::Channel> OpenChannel(const Connection& c) {
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!c.tls_ca.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = ReadFile(c.tls_ca, "--tls-ca");
+    if (!c.tls_cert.empty()) ssl.pem_cert_chain = ReadFile(c.tls_cert, "--tls-cert");
+    if (!c.tls_key.empty()) ssl.pem_private_key = ReadFile(c.tls_key, "--tls-key");
+    credentials = grpc::SslCredentials(ssl);
+  }
+  return clients::ChannelWithToken(c.endpoint, credentials, c.token);
+}
+
+}  // namespace
+
+void ResolveServer(const std::string& server, Connection* connection) {
+  if (server.empty() || server[0] != '@') {
+    connection->endpoint = server;
+    return;
+  }
+  std::istringstream lines(ReadFile(server.substr(1), "endpoint file"));
+  std::string endpoint, token;
+  std::getline(lines, endpoint);
+  std::getline(lines, token);
+  const auto trim = [](std::string& s) {
+    s.erase(s.find_last_not_of(" \n\r\t") + 1);
+    s.erase(0, s.find_first_not_of(" \t"));
+  };
+  trim(endpoint);
+  trim(token);
+  if (endpoint.empty()) throw UsageError("endpoint file " + server.substr(1) + " holds no HOST:PORT");
+  connection->endpoint = endpoint;
+  if (connection->token.empty()) connection->token = token;
+}
+
+Client::Client(const Connection& connection)
+    : stub_(v1::MobilityService::NewStub(OpenChannel(connection))) {}
 
 grpc::Status Client::Watch(const std::string& id, v1::JobStatus* last) {
   ProgressBar bar;

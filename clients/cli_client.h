@@ -52,10 +52,24 @@ int Fail(const grpc::Status& s);
 // "QUEUED", "RUNNING", "DONE", "FAILED", "CANCELLED" or "UNKNOWN".
 const char* StateName(v1::JobState s);
 
+// Where the server is and how to talk to it.
+struct Connection {
+  std::string endpoint;  // HOST:PORT
+  std::string token;     // bearer token; empty: none sent
+  // TLS: the CA that signed the server's certificate (empty: plaintext), and this client's
+  // certificate and key for a server that requires them.
+  std::string tls_ca, tls_cert, tls_key;
+};
+
+// `--server` as given: "@FILE" is an endpoint file (gonogo-server --endpoint-file), whose first line
+// is HOST:PORT and whose optional second line is a bearer token; anything else is HOST:PORT.
+// Fills `connection`'s endpoint, and its token when the file has one and `connection` has none.
+void ResolveServer(const std::string& server, Connection* connection);
+
 // A connection to one gonogo-server.
 class Client {
  public:
-  explicit Client(const std::string& endpoint);
+  explicit Client(const Connection& connection);
 
   // Follows the job with a progress bar on stderr until it ends; `last` gets its final status.
   grpc::Status Watch(const std::string& id, v1::JobStatus* last);

@@ -180,16 +180,20 @@ int RunJobs(Client& client, unsigned limit) {
   v1::ListJobsResponse resp;
   const grpc::Status s = client.stub().ListJobs(&ctx, req, &resp);
   if (!s.ok()) return Fail(s);
+  // An admin sees every identity's jobs: then each line says whose it is.
+  bool several_owners = false;
+  for (const auto& j : resp.jobs()) several_owners |= j.owner() != resp.jobs(0).owner();
   std::cout << std::left << std::setw(18) << "JOB" << std::setw(11) << "STATE" << std::setw(11)
             << "TIER" << std::setw(7) << "DONE" << std::setw(13) << "TASKS"
-            << "NAME / MESSAGE\n";
+            << (several_owners ? "OWNER: " : "") << "NAME / MESSAGE\n";
   for (const auto& j : resp.jobs()) {
     std::ostringstream tasks;
     tasks << j.status().tasks_done() << "/" << j.status().tasks_total();
     std::cout << std::left << std::setw(18) << j.job_id() << std::setw(11)
               << StateName(j.status().state()) << std::setw(11) << j.tier() << std::setw(7)
               << (std::to_string(static_cast<int>(100 * j.status().fraction_done())) + "%")
-              << std::setw(13) << tasks.str() << j.name() << " / " << j.status().message() << "\n";
+              << std::setw(13) << tasks.str() << (several_owners ? j.owner() + ": " : "") << j.name()
+              << " / " << j.status().message() << "\n";
   }
   return kExitOk;
 }

@@ -23,14 +23,6 @@ using namespace gonogo::cli;
 
 constexpr const char* kDefaultServer = "127.0.0.1:50051";
 
-// "@FILE": the endpoint written in FILE (gonogo-server writes one); otherwise `server` itself.
-std::string ResolveServer(const std::string& server) {
-  if (server.empty() || server[0] != '@') return server;
-  std::string endpoint = ReadFile(server.substr(1), "endpoint file");
-  endpoint.erase(endpoint.find_last_not_of(" \n\r\t") + 1);
-  return endpoint;
-}
-
 // The command the command line chose, "" when none.
 std::string ChosenCommand(const CLI::App& app) {
   const auto chosen = app.get_subcommands();
@@ -57,12 +49,28 @@ int UsageFailure(const CLI::App& app, const std::string& message) {
   return kExitUsage;
 }
 
-void AddGlobalOptions(CLI::App& app, std::string* server) {
-  app.add_option("--server", *server, "gonogo-server's HOST:PORT, or @FILE holding it")
+void AddGlobalOptions(CLI::App& app, std::string* server, Connection* connection) {
+  app.add_option("--server", *server,
+                 "gonogo-server's HOST:PORT, or @FILE holding it (and a token on its second line)")
       ->type_name("HOST:PORT|@FILE")
       ->envname("GONOGO_SERVER")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast)
       ->capture_default_str();
+  app.add_option("--token", connection->token, "bearer token the server gave you")
+      ->type_name("TOKEN")
+      ->envname("GONOGO_TOKEN");
+  app.add_option("--tls-ca", connection->tls_ca, "talk TLS, trusting the server certificate this CA signed")
+      ->type_name("PEM")
+      ->envname("GONOGO_TLS_CA")
+      ->check(InputFile());
+  app.add_option("--tls-cert", connection->tls_cert, "this client's certificate, for a server that asks")
+      ->type_name("PEM")
+      ->envname("GONOGO_TLS_CERT")
+      ->check(InputFile());
+  app.add_option("--tls-key", connection->tls_key, "the private key of --tls-cert")
+      ->type_name("PEM")
+      ->envname("GONOGO_TLS_KEY")
+      ->check(InputFile());
   app.require_subcommand(1);
   app.get_formatter()->column_width(40);
 }
@@ -73,7 +81,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Command-line client of gonogo-server: vehicle GO/NO-GO maps, traction curves.",
                "gonogo"};
   std::string server = kDefaultServer;
-  AddGlobalOptions(app, &server);
+  Connection connection;
+  AddGlobalOptions(app, &server, &connection);
   const std::vector<Command> commands = {
       AddMapCommand(app),         AddJobsCommand(app),     AddWatchCommand(app),
       AddCancelCommand(app),      AddDownloadCommand(app), AddCurveCommand(app),
@@ -85,7 +94,8 @@ int main(int argc, char** argv) {
       "Exit codes: 0 done, 1 the job failed or was cancelled, 2 a usage error, 3 a server error.");
   try {
     app.parse(argc, argv);
-    Client client(ResolveServer(server));
+    ResolveServer(server, &connection);
+    Client client(connection);
     for (const Command& c : commands) {
       if (c.app->parsed()) return c.run(client);
     }

@@ -19,8 +19,9 @@ packages=(
   libtorch-dev python3-torch
   # drawing the PNG plots and quicklooks (server/geo), and their font
   libcairo2-dev fonts-dejavu-core
-  # tests; the products opened in QGIS (offscreen) and the STAC item checked against its schema
-  libgtest-dev libgmock-dev python3-qgis python3-jsonschema
+  # tests; the products opened in QGIS (offscreen) and the STAC item checked against its schema;
+  # certificates for the TLS tests
+  libgtest-dev libgmock-dev python3-qgis python3-jsonschema openssl
 )
 
 missing=()

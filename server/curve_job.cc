@@ -18,13 +18,15 @@ namespace gonogo::server {
 
 namespace fs = std::filesystem;
 
-v1::Job JobManager::SubmitCurve(const std::string& id, const v1::GetTractionCurveRequest& request) {
+v1::Job JobManager::SubmitCurve(const std::string& id, const std::string& owner,
+                                const v1::GetTractionCurveRequest& request) {
   Require(!request.tier().empty(), "tier", "is missing");
   const TractionTier& tier = tiers_.Get(request.tier());
   Require(request.has_tyre(), "tyre", "is missing");
   CurveResolver::Prepare(tier, FromProto(request));  // validates before anything is persisted
   cache::JobRecord rec;
   rec.id = id;
+  rec.owner = owner;
   rec.kind = cache::kCurveJob;
   rec.name = "traction curve";
   rec.tier = tier.Name();

@@ -149,10 +149,12 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
   return terrain;
 }
 
-v1::Job JobManager::Submit(const std::string& id, const v1::MapRequest& request,
+v1::Job JobManager::Submit(const std::string& id, const std::string& owner,
+                           const v1::MapRequest& request,
                            std::shared_ptr<geo::TerrainLayers> terrain) {
   cache::JobRecord rec;
   rec.id = id;
+  rec.owner = owner;
   rec.kind = cache::kMapJob;
   rec.name = request.name();
   rec.tier = request.tier();
@@ -272,9 +274,9 @@ std::optional<v1::Job> JobManager::GetJob(const std::string& id) {
   return job;
 }
 
-std::vector<v1::Job> JobManager::ListJobs(int limit) {
+std::vector<v1::Job> JobManager::ListJobs(int limit, const std::string& owner) {
   std::vector<v1::Job> out;
-  for (const auto& rec : jobs_.List(limit)) {
+  for (const auto& rec : jobs_.List(limit, owner)) {
     v1::Job job = JobOf(rec);
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = live_.find(rec.id);

@@ -63,15 +63,18 @@ class JobManager {
   // terrain so that the job does not read it twice.
   std::shared_ptr<geo::TerrainLayers> Validate(const v1::MapRequest& request,
                                                const JobInputs& inputs) const;
-  // Persists the job (QUEUED) and queues it. `terrain` may be null (it is then read from the inputs).
-  v1::Job Submit(const std::string& job_id, const v1::MapRequest& request,
+  // Persists the job (QUEUED), owned by the identity `owner`, and queues it. `terrain` may be null
+  // (it is then read from the inputs).
+  v1::Job Submit(const std::string& job_id, const std::string& owner, const v1::MapRequest& request,
                  std::shared_ptr<geo::TerrainLayers> terrain);
   // Validates a curve query (tier, tyre, load, soil: InputError naming the field) and persists it
   // as a job of kind "curve" (QUEUED).
-  v1::Job SubmitCurve(const std::string& job_id, const v1::GetTractionCurveRequest& request);
+  v1::Job SubmitCurve(const std::string& job_id, const std::string& owner,
+                      const v1::GetTractionCurveRequest& request);
   // Validates a training request (soil, recipe, base model: InputError naming the field) and
   // persists it as a job of kind "train" (QUEUED); server/train_job.cc.
-  v1::Job SubmitTraining(const std::string& job_id, const v1::TrainSurrogateRequest& request);
+  v1::Job SubmitTraining(const std::string& job_id, const std::string& owner,
+                         const v1::TrainSurrogateRequest& request);
   // Re-queues the jobs a previous run left QUEUED or RUNNING. Call once, before Start().
   int ResumeUnfinished();
   void Start();
@@ -80,7 +83,8 @@ class JobManager {
   void Drain();
 
   std::optional<v1::Job> GetJob(const std::string& job_id);
-  std::vector<v1::Job> ListJobs(int limit);
+  // Newest first; with a non-empty `owner`, that identity's jobs only.
+  std::vector<v1::Job> ListJobs(int limit, const std::string& owner);
   // Throws InputError("job_id") when unknown; returns the job after the request.
   v1::Job Cancel(const std::string& job_id);
   // Waits until the job's status changes from `seen_version` or `timeout_ms` passes; returns the

@@ -34,6 +34,7 @@ v1::Job JobOf(const cache::JobRecord& j) {
   for (const auto& p : j.products) out.add_products(p);
   out.set_summary_json(j.summary_json);
   out.set_kind(j.kind);
+  out.set_owner(j.owner);
   return out;
 }
 

@@ -5,7 +5,12 @@
 //   gonogo-server --help                                        every option, with its default
 //
 // Port 0 picks a free port; the chosen endpoint is printed ("listening on HOST:PORT") and, with
-// --endpoint-file, written to that file (mode 0600) for clients on a cluster.
+// --endpoint-file, written to that file (mode 0600) for clients on a cluster, with the generated
+// token on its second line under --generate-token.
+//
+// Transport and identity (server/identity.h): plaintext is for loopback addresses; a network
+// address needs tokens, and TLS (--tls-cert, --tls-key) unless --allow-plaintext-network says
+// otherwise. Everything the server writes is private to its user (umask 077, data directory 0700).
 #include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
@@ -14,6 +19,7 @@
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -26,6 +32,7 @@
 #include <thread>
 
 #include "cache/database.h"
+#include "server/identity.h"
 #include "server/job_manager.h"
 #include "server/mpi_pool.h"
 #include "server/service.h"
@@ -46,8 +53,14 @@ struct Options {
   uint32_t task_delay_ms = 0;
   int64_t max_cells = 25'000'000;
   int max_jobs = 2;
+  int64_t max_upload_mib = 512;
+  double curve_timeout_s = 1800;
   bool diagnostic_tiers = false;
   std::string log_level = "info";
+  std::string token_file;
+  bool generate_token = false;
+  std::string tls_cert, tls_key, tls_client_ca;
+  bool allow_plaintext_network = false;
   gonogo::BuiltinTierOptions tier_options;
 };
 
@@ -70,6 +83,11 @@ Options Parse(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--max-jobs", o.max_jobs, "map and curve jobs that run at once")
       ->check(CLI::Range(1, 64));
+  app.add_option("--max-upload-mib", o.max_upload_mib, "largest upload of one map job, all rasters together, MiB")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 20));
+  app.add_option("--curve-timeout-s", o.curve_timeout_s,
+                 "longest a GetTractionCurve or RunScalability call waits for the pool, s")
+      ->check(CLI::Range(1.0, 86400.0));
   app.add_option("--task-delay-ms", o.task_delay_ms,
                  "delay every traction task by this many ms (fault-injection tests and demos)");
   app.add_option("--fe-de-preset", o.tier_options.fe_de_preset,
@@ -88,6 +106,29 @@ Options Parse(int argc, char** argv) {
       ->check(CLI::Range(0.0, 86400.0));
   app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
                "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
+  app.add_option("--token-file", o.token_file,
+                 "bearer tokens, one 'TOKEN IDENTITY [admin]' per line; the file must be private "
+                 "(mode 0600)")
+      ->check(CLI::ExistingFile);
+  auto* generate = app.add_flag(
+      "--generate-token", o.generate_token,
+      "generate a token for the user running the server (an admin identity) and write it to the "
+      "endpoint file's second line");
+  auto* endpoint_file = app.get_option("--endpoint-file");
+  generate->needs(endpoint_file);
+  auto* cert = app.add_option("--tls-cert", o.tls_cert, "serve TLS with this PEM certificate (chain)")
+                   ->check(CLI::ExistingFile);
+  auto* key = app.add_option("--tls-key", o.tls_key, "the PEM private key of --tls-cert")
+                  ->check(CLI::ExistingFile);
+  cert->needs(key);
+  key->needs(cert);
+  app.add_option("--tls-client-ca", o.tls_client_ca,
+                 "require client certificates signed by this PEM CA (with --tls-cert)")
+      ->check(CLI::ExistingFile)
+      ->needs(cert);
+  app.add_flag("--allow-plaintext-network", o.allow_plaintext_network,
+               "allow plaintext on a non-loopback --listen address (tokens then cross the network "
+               "unencrypted)");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error or off (logs go to stderr)")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
   try {
@@ -100,10 +141,95 @@ Options Parse(int argc, char** argv) {
   return o;
 }
 
+std::string ReadWholeFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(what + " " + path + ": cannot be read");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// How the server is reached and who may call: the credentials to listen with, and the words the
+// banner says it in. Throws std::runtime_error naming the option when the combination would expose
+// the service: a network address with no tokens, or in plaintext without --allow-plaintext-network.
+struct Transport {
+  std::shared_ptr<grpc::ServerCredentials> credentials;
+  std::string description;
+};
+
+Transport ChooseTransport(const Options& o, const gonogo::server::Authenticator& auth) {
+  using gonogo::server::IsLoopbackHost;
+  const std::string host = o.listen.substr(0, o.listen.rfind(':'));
+  const bool loopback = IsLoopbackHost(host);
+  const bool tls = !o.tls_cert.empty();
+  if (!loopback && !auth.required()) {
+    throw std::runtime_error("--listen " + o.listen +
+                             " is not a loopback address: a server other hosts can reach needs "
+                             "--token-file or --generate-token");
+  }
+  if (!loopback && !tls && !o.allow_plaintext_network) {
+    throw std::runtime_error("--listen " + o.listen +
+                             " is not a loopback address: serve TLS (--tls-cert, --tls-key) or "
+                             "accept plaintext with --allow-plaintext-network");
+  }
+  Transport t;
+  if (tls) {
+    grpc::SslServerCredentialsOptions ssl(
+        o.tls_client_ca.empty() ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                : GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+    if (!o.tls_client_ca.empty()) ssl.pem_root_certs = ReadWholeFile(o.tls_client_ca, "--tls-client-ca");
+    ssl.pem_key_cert_pairs.push_back(
+        {ReadWholeFile(o.tls_key, "--tls-key"), ReadWholeFile(o.tls_cert, "--tls-cert")});
+    t.credentials = grpc::SslServerCredentials(ssl);
+    t.description = o.tls_client_ca.empty() ? "TLS" : "TLS with client certificates";
+  } else {
+    t.credentials = grpc::InsecureServerCredentials();
+    t.description = loopback ? "plaintext on loopback"
+                             : "PLAINTEXT on a network address: tokens cross the network unencrypted";
+  }
+  t.description += auth.required()
+                       ? ", bearer tokens for " + std::to_string(auth.identity_count()) + " identities"
+                       : ", no tokens: every user of this host can connect";
+  return t;
+}
+
+// Writes "HOST:PORT\n" and, when there is one, "TOKEN\n" to `path`, created with mode 0600 (never
+// readable by anyone else, not even between creation and a chmod) and renamed into place whole.
+void WriteEndpointFile(const std::string& path, const std::string& endpoint, const std::string& token) {
+  const std::string tmp = path + ".tmp";
+  unlink(tmp.c_str());
+  const int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+  if (fd < 0) throw std::runtime_error("--endpoint-file " + path + ": cannot be created");
+  const std::string text = endpoint + "\n" + (token.empty() ? "" : token + "\n");
+  const bool written = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  close(fd);
+  if (!written) throw std::runtime_error("--endpoint-file " + path + ": cannot be written");
+  std::filesystem::rename(tmp, path);
+}
+
+// The data directory and the database: private to the service's user whatever they were created
+// with (files made later are private through the umask set in main()).
+void MakePrivate(const std::filesystem::path& data_dir) {
+  std::filesystem::create_directories(data_dir);
+  if (chmod(data_dir.c_str(), 0700) != 0) {
+    throw std::runtime_error("--data-dir " + data_dir.string() + ": cannot be made private (chmod 0700)");
+  }
+  for (const char* name : {"gonogo.sqlite", "gonogo.sqlite-wal", "gonogo.sqlite-shm"}) {
+    const auto path = data_dir / name;
+    if (std::filesystem::exists(path)) chmod(path.c_str(), 0600);
+  }
+}
+
 int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::WorkerPool& pool,
           const sigset_t& signals) {
   using namespace gonogo;
-  std::filesystem::create_directories(o.data_dir);
+  server::Authenticator authenticator;
+  if (!o.token_file.empty()) authenticator.LoadTokenFile(o.token_file);
+  std::string generated_token;
+  if (o.generate_token) {
+    generated_token = server::GenerateToken();
+    authenticator.AddToken(generated_token, {server::ProcessUserName(), true});
+  }
+  const Transport transport = ChooseTransport(o, authenticator);
+  MakePrivate(o.data_dir);
   cache::Database db((std::filesystem::path(o.data_dir) / "gonogo.sqlite").string());
 
   server::JobManagerConfig config;
@@ -121,7 +247,10 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   resolver.set_checkpoint_root((std::filesystem::path(o.data_dir) / "checkpoints").string());
   server::JobManager jobs(config, db, tiers, resolver);
   const int resumed = jobs.ResumeUnfinished();
-  server::MobilityServiceImpl service(jobs, db, tiers, resolver, server::ServiceLimits{},
+  server::ServiceLimits limits;
+  limits.max_upload_bytes = o.max_upload_mib << 20;
+  limits.curve_timeout_ms = static_cast<int>(o.curve_timeout_s * 1000);
+  server::MobilityServiceImpl service(jobs, db, tiers, resolver, authenticator, limits,
                                      o.tier_options.models_dir);
   const int abandoned = tiers::SurrogateRegistry(o.tier_options.models_dir).CollectAbandoned();
   if (abandoned > 0) spdlog::warn("removed {} unfinished model registrations", abandoned);
@@ -130,7 +259,7 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(o.listen, transport.credentials, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(8 << 20);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
@@ -144,19 +273,12 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
 
   const std::string host = o.listen.substr(0, o.listen.rfind(':'));
   const std::string endpoint = host + ":" + std::to_string(port);
-  if (!o.endpoint_file.empty()) {
-    const std::string tmp = o.endpoint_file + ".tmp";
-    {
-      std::ofstream f(tmp);
-      f << endpoint << "\n";
-    }
-    chmod(tmp.c_str(), 0600);
-    std::filesystem::rename(tmp, o.endpoint_file);
-  }
+  if (!o.endpoint_file.empty()) WriteEndpointFile(o.endpoint_file, endpoint, generated_token);
   std::cout << "gonogo-server listening on " << endpoint << " (pid " << getpid() << ", " << pool.Describe()
             << ", tiers:";
   for (const auto& n : tiers.Names()) std::cout << " " << n;
-  std::cout << ", data " << o.data_dir << ", " << resumed << " jobs resumed)" << std::endl;
+  std::cout << ", data " << o.data_dir << ", " << resumed << " jobs resumed; " << transport.description
+            << ")" << std::endl;
 
   // SIGTERM / SIGINT drain: refuse new work, report NOT_SERVING, stop the scheduler (the running
   // job returns to QUEUED), then stop gRPC and the pool.
@@ -193,6 +315,9 @@ int main(int argc, char** argv) {
     execv("/proc/self/exe", argv);  // returns only on failure: go on with the default policy
   }
   const Options options = Parse(argc, argv);
+  // Whatever the caller's umask, what the server writes (database, inputs, products, checkpoints,
+  // models, the endpoint file) is readable by the service's user only.
+  umask(077);
   // Signals are taken by sigwait in Serve(); every thread created later inherits the mask.
   sigset_t signals;
   sigemptyset(&signals);

@@ -74,8 +74,10 @@ grpc::Status StreamFiles(grpc::ServerContext* context, grpc::ServerWriter<v1::Re
 
 MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
                                          const TierRegistry& tiers, CurveResolver& resolver,
-                                         ServiceLimits limits, std::string models_dir)
+                                         const Authenticator& authenticator, ServiceLimits limits,
+                                         std::string models_dir)
     : jobs_(jobs),
+      authenticator_(authenticator),
       db_(db),
       curves_(db),
       tiers_(tiers),
@@ -87,9 +89,21 @@ MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
   fs::remove_all(ExportsDir(jobs_.data_dir()), ignored);
 }
 
-grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::VisibleJob(const std::string& job_id, const Identity& caller,
+                                             v1::Job* job) {
+  auto found = jobs_.GetJob(job_id);
+  if (!found || (!caller.admin && found->owner() != caller.name)) {
+    return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id + "'"};
+  }
+  *job = std::move(*found);
+  return grpc::Status::OK;
+}
+
+grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext* context,
                                             grpc::ServerReader<v1::SubmitMapRequest>* reader,
                                             v1::Job* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
   const std::string id = jobs_.NewJobId();
   const fs::path inputs_dir = fs::path(jobs_.JobDir(id)) / "inputs";
@@ -117,8 +131,9 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
       Require(name != nullptr, "chunk.role", "unknown raster role");
       received += static_cast<int64_t>(message.chunk().data().size());
       if (received > limits_.max_upload_bytes) {
-        throw LimitError("rasters", "upload exceeds the limit of " +
-                                        std::to_string(limits_.max_upload_bytes) + " bytes");
+        throw LimitError("rasters", "the upload exceeds the server's limit of " +
+                                        std::to_string(limits_.max_upload_bytes >> 20) +
+                                        " MiB (gonogo-server --max-upload-mib)");
       }
       auto& out = files[message.chunk().role()];
       if (!out.is_open()) out.open(inputs_dir / name, std::ios::binary);
@@ -137,7 +152,7 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
       }
     }
     auto terrain = jobs_.Validate(request, inputs);
-    *response = jobs_.Submit(id, request, std::move(terrain));
+    *response = jobs_.Submit(id, caller.name, request, std::move(terrain));
     cleanup.keep = true;
     return grpc::Status::OK;
   } catch (...) {
@@ -148,6 +163,10 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext*,
 grpc::Status MobilityServiceImpl::WatchJob(grpc::ServerContext* context,
                                            const v1::WatchJobRequest* request,
                                            grpc::ServerWriter<v1::JobStatus>* writer) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
+  v1::Job job;
+  if (grpc::Status hidden = VisibleJob(request->job_id(), caller, &job); !hidden.ok()) return hidden;
   uint64_t seen = 0;
   while (!context->IsCancelled()) {
     auto status = jobs_.WaitStatus(request->job_id(), seen, 500);
@@ -165,36 +184,43 @@ grpc::Status MobilityServiceImpl::WatchJob(grpc::ServerContext* context,
   return grpc::Status::CANCELLED;
 }
 
-grpc::Status MobilityServiceImpl::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+grpc::Status MobilityServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                          v1::Job* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
-    auto job = jobs_.GetJob(request->job_id());
-    if (!job) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
-    *response = *job;
-    return grpc::Status::OK;
+    return VisibleJob(request->job_id(), caller, response);
   } catch (...) {
     return ToStatus(std::current_exception());
   }
 }
 
-grpc::Status MobilityServiceImpl::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+grpc::Status MobilityServiceImpl::ListJobs(grpc::ServerContext* context, const v1::ListJobsRequest* request,
                                            v1::ListJobsResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     const int limit = request->limit() == 0 ? 50 : static_cast<int>(std::min(request->limit(), 1000u));
-    for (auto& job : jobs_.ListJobs(limit)) *response->add_jobs() = std::move(job);
+    for (auto& job : jobs_.ListJobs(limit, caller.admin ? "" : caller.name)) {
+      *response->add_jobs() = std::move(job);
+    }
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
   }
 }
 
-grpc::Status MobilityServiceImpl::CancelJob(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::CancelJob(grpc::ServerContext* context,
                                             const v1::CancelJobRequest* request,
                                             v1::Job* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
-    auto before = jobs_.GetJob(request->job_id());
-    if (!before) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
-    const auto state = before->status().state();
+    v1::Job before;
+    if (grpc::Status hidden = VisibleJob(request->job_id(), caller, &before); !hidden.ok()) {
+      return hidden;
+    }
+    const auto state = before.status().state();
     if (state == v1::JOB_STATE_DONE || state == v1::JOB_STATE_FAILED ||
         state == v1::JOB_STATE_CANCELLED) {
       return {grpc::StatusCode::FAILED_PRECONDITION,
@@ -210,13 +236,15 @@ grpc::Status MobilityServiceImpl::CancelJob(grpc::ServerContext*,
 grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
                                                  const v1::DownloadResultRequest* request,
                                                  grpc::ServerWriter<v1::ResultChunk>* writer) {
-  auto job = jobs_.GetJob(request->job_id());
-  if (!job) return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"};
-  if (job->status().state() != v1::JOB_STATE_DONE) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
+  v1::Job job;
+  if (grpc::Status hidden = VisibleJob(request->job_id(), caller, &job); !hidden.ok()) return hidden;
+  if (job.status().state() != v1::JOB_STATE_DONE) {
     return {grpc::StatusCode::FAILED_PRECONDITION, "job_id: job has no products until it is DONE"};
   }
   std::vector<std::string> wanted;
-  for (const auto& p : job->products()) {
+  for (const auto& p : job.products()) {
     if (request->product().empty() || request->product() == p) wanted.push_back(p);
   }
   if (wanted.empty()) {
@@ -228,6 +256,8 @@ grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
 grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
                                                    const v1::GetTractionCurveRequest* request,
                                                    v1::TractionCurve* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
     Require(!request->tier().empty(), "tier", "is missing");
@@ -265,21 +295,25 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
   }
 }
 
-grpc::Status MobilityServiceImpl::SubmitCurve(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::SubmitCurve(grpc::ServerContext* context,
                                               const v1::GetTractionCurveRequest* request,
                                               v1::Job* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
-    *response = jobs_.SubmitCurve(jobs_.NewJobId(), *request);
+    *response = jobs_.SubmitCurve(jobs_.NewJobId(), caller.name, *request);
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
   }
 }
 
-grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext* context,
                                                      const v1::ListTractionCurvesRequest* request,
                                                      v1::ListTractionCurvesResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     int64_t before = 0;
     if (!request->page_token().empty()) {
@@ -309,6 +343,8 @@ namespace gonogo::server {
 grpc::Status MobilityServiceImpl::RunScalability(grpc::ServerContext* context,
                                                  const v1::ScalabilityRequest* request,
                                                  v1::ScalabilityReport* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
     const auto deadline = std::chrono::steady_clock::now() +
@@ -321,8 +357,10 @@ grpc::Status MobilityServiceImpl::RunScalability(grpc::ServerContext* context,
   }
 }
 
-grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext*, const v1::ListTiersRequest*,
+grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext* context, const v1::ListTiersRequest*,
                                             v1::ListTiersResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   for (const std::string& name : tiers_.Names()) {
     const TractionTier& tier = tiers_.Get(name);
     const TierDescription d = tier.Describe();
@@ -341,9 +379,11 @@ grpc::Status MobilityServiceImpl::ListTiers(grpc::ServerContext*, const v1::List
   return grpc::Status::OK;
 }
 
-grpc::Status MobilityServiceImpl::ListSoilModels(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::ListSoilModels(grpc::ServerContext* context,
                                                  const v1::ListSoilModelsRequest*,
                                                  v1::ListSoilModelsResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   for (const std::string& name : SoilModels().Names()) {
     const SoilModelSpec& spec = *SoilModels().Find(name);
     v1::SoilModelInfo* model = response->add_models();
@@ -384,8 +424,10 @@ grpc::Status MobilityServiceImpl::ListSoilModels(grpc::ServerContext*,
 }
 
 grpc::Status MobilityServiceImpl::ListSurrogateModels(
-    grpc::ServerContext*, const v1::ListSurrogateModelsRequest* request,
+    grpc::ServerContext* context, const v1::ListSurrogateModelsRequest* request,
     v1::ListSurrogateModelsResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     Require(request->soil_name().size() <= 256, "soil_name", "must be at most 256 characters");
     if (models_dir_.empty()) return grpc::Status::OK;
@@ -399,21 +441,25 @@ grpc::Status MobilityServiceImpl::ListSurrogateModels(
   }
 }
 
-grpc::Status MobilityServiceImpl::TrainSurrogate(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::TrainSurrogate(grpc::ServerContext* context,
                                                  const v1::TrainSurrogateRequest* request,
                                                  v1::Job* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
-    *response = jobs_.SubmitTraining(jobs_.NewJobId(), *request);
+    *response = jobs_.SubmitTraining(jobs_.NewJobId(), caller.name, *request);
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
   }
 }
 
-grpc::Status MobilityServiceImpl::ListDatasets(grpc::ServerContext*,
+grpc::Status MobilityServiceImpl::ListDatasets(grpc::ServerContext* context,
                                                const v1::ListDatasetsRequest* request,
                                                v1::ListDatasetsResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     Require(request->soil_name().size() <= 256, "soil_name", "must be at most 256 characters");
     for (const cache::DatasetSummary& d : cache::DatasetStore(db_).List(request->soil_name())) {
@@ -441,6 +487,8 @@ grpc::Status MobilityServiceImpl::ListDatasets(grpc::ServerContext*,
 grpc::Status MobilityServiceImpl::ExportDataset(grpc::ServerContext* context,
                                                 const v1::ExportDatasetRequest* request,
                                                 grpc::ServerWriter<v1::ResultChunk>* writer) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   // Staged in a private directory under the data directory, removed whatever happens.
   struct Staging {
     fs::path dir;

@@ -10,25 +10,28 @@
 #include "cache/curve_store.h"
 #include "gonogo/v1/mobility.grpc.pb.h"
 #include "server/curve_resolver.h"
+#include "server/identity.h"
 #include "server/job_manager.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
 
 namespace gonogo::server {
 
+// Bounds on what one request may cost (README "Security and limits"; gonogo-server's options).
 struct ServiceLimits {
-  int64_t max_upload_bytes = 512LL << 20;  // all rasters of one job together
-  // GetTractionCurve's wait for the pool: an fe-classic curve takes minutes on one core.
+  int64_t max_upload_bytes = 512LL << 20;  // all rasters of one job together (--max-upload-mib)
+  // GetTractionCurve's wait for the pool: an fe-classic curve takes minutes on one core
+  // (--curve-timeout-s).
   int curve_timeout_ms = 30 * 60 * 1000;
 };
 
 class MobilityServiceImpl final : public v1::MobilityService::Service {
  public:
   // `models_dir`: the fe-ann tier's model registry (solvers/tiers/surrogate_registry.h); empty:
-  // none.
+  // none. Every call is identified by `authenticator` (server/identity.h) before anything else.
   MobilityServiceImpl(JobManager& jobs, cache::Database& db, const TierRegistry& tiers,
-                      CurveResolver& resolver, ServiceLimits limits,
-                      std::string models_dir = "");
+                      CurveResolver& resolver, const Authenticator& authenticator,
+                      ServiceLimits limits, std::string models_dir = "");
 
   // While draining, new work is refused with UNAVAILABLE.
   void SetDraining() { draining_ = true; }
@@ -65,7 +68,15 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
                              grpc::ServerWriter<v1::ResultChunk>*) override;
 
  private:
+  grpc::Status Authenticate(const grpc::ServerContext& context, Identity* caller) const {
+    return authenticator_.Identify(context, caller);
+  }
+  // The job when `caller` may see it (its owner, or an admin). Another identity's job is NOT_FOUND,
+  // worded as for an unknown id, so that ids leak nothing.
+  grpc::Status VisibleJob(const std::string& job_id, const Identity& caller, v1::Job* job);
+
   JobManager& jobs_;
+  const Authenticator& authenticator_;
   cache::Database& db_;
   cache::CurveStore curves_;
   const TierRegistry& tiers_;

@@ -271,7 +271,8 @@ std::string RigPathName(const RigRecipe& rig, int k) {
 
 }  // namespace
 
-v1::Job JobManager::SubmitTraining(const std::string& id, const v1::TrainSurrogateRequest& request) {
+v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& owner,
+                                   const v1::TrainSurrogateRequest& request) {
   if (config_.models_dir.empty()) {
     throw PreconditionError("tier", "this server keeps no fe-ann models (no data directory)");
   }
@@ -291,6 +292,7 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const v1::TrainSurroga
   }
   cache::JobRecord rec;
   rec.id = id;
+  rec.owner = owner;
   rec.kind = cache::kTrainJob;
   rec.name = request.name().empty() ? "surrogate training: " + soil.soil : request.name();
   rec.tier = "fe-ann";

@@ -51,7 +51,7 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 6);
+  EXPECT_EQ(db.SchemaVersion(), 7);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
@@ -77,18 +77,25 @@ TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
       finished_unix_ms INTEGER NOT NULL DEFAULT 0);
     INSERT INTO curves VALUES (1, 'old-key', 'empirical', 'empirical-1', '', 149000, 1.011, 0.335,
       0.2178, 0.0327, 0.4728, 14513, x'', 'thread', 0.001, 77);
+    INSERT INTO jobs (id, name, tier, state, request, created_unix_ms)
+      VALUES ('job-old', 'old map', 'empirical', 3, x'', 78);
     PRAGMA user_version = 1;)sql";
   ASSERT_EQ(sqlite3_exec(raw, v1, nullptr, nullptr, nullptr), SQLITE_OK);
   sqlite3_close(raw);
 
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 6);
+  EXPECT_EQ(db.SchemaVersion(), 7);
   CurveStore store(db);
   auto old = store.Find("old-key");
   ASSERT_TRUE(old.has_value());
   EXPECT_EQ(old->computed_unix_ms, 77);
   EXPECT_FALSE(old->request.soil.parameters.has_value());
   EXPECT_EQ(old->request.tyre.inflation_pressure_pa, 0.0);
+  // Jobs from before identities belong to the one identity there was.
+  const auto job = JobStore(db).Get("job-old");
+  ASSERT_TRUE(job.has_value());
+  EXPECT_EQ(job->owner, "local");
+  EXPECT_EQ(job->kind, "map");
 }
 
 TEST_F(StoreTest, BekkerParametersRoundTrip) {

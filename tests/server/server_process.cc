@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "clients/bearer_token.h"
+
 namespace gonogo::testing {
 
 // The environment (set by CTest) wins; benchmarks run by hand fall back to the configured tree.
@@ -161,12 +163,12 @@ void ServerProcess::Kill() {
   pid_ = -1;
 }
 
-std::shared_ptr<grpc::Channel> ServerProcess::Channel() const {
-  return grpc::CreateChannel(endpoint_, grpc::InsecureChannelCredentials());
+std::shared_ptr<grpc::Channel> ServerProcess::Channel(const std::string& token) const {
+  return clients::ChannelWithToken(endpoint_, grpc::InsecureChannelCredentials(), token);
 }
 
-std::unique_ptr<v1::MobilityService::Stub> ServerProcess::Stub() const {
-  return v1::MobilityService::NewStub(Channel());
+std::unique_ptr<v1::MobilityService::Stub> ServerProcess::Stub(const std::string& token) const {
+  return v1::MobilityService::NewStub(Channel(token));
 }
 
 v1::Vehicle FedAlpha() {

@@ -50,8 +50,9 @@ class ServerProcess {
 
   const std::string& endpoint() const { return endpoint_; }
   const std::string& banner() const { return banner_; }
-  std::unique_ptr<v1::MobilityService::Stub> Stub() const;
-  std::shared_ptr<grpc::Channel> Channel() const;
+  // Plaintext; with a `token`, every call carries it as "authorization: Bearer TOKEN".
+  std::unique_ptr<v1::MobilityService::Stub> Stub(const std::string& token = "") const;
+  std::shared_ptr<grpc::Channel> Channel(const std::string& token = "") const;
   // SIGTERM to the serving process (rank 0 under mpirun) and wait; returns the exit status of the
   // started process (mpirun's under MPI).
   int Terminate();
