@@ -150,6 +150,7 @@ CurvePage CurveStore::List(const CurveFilter& f, int page_size, int64_t before_i
     }
     page.curves.push_back(ReadRow(s));
     last_id = s.Int(0);
+    page.row_ids.push_back(last_id);
   }
   return page;
 }

@@ -30,6 +30,7 @@ struct CurveFilter {
 
 struct CurvePage {
   std::vector<StoredCurve> curves;
+  std::vector<int64_t> row_ids;  // of each curve: a page cut short continues before the last kept
   int64_t next_after_id = 0;     // 0 on the last page
 };
 

@@ -100,6 +100,25 @@ std::vector<JobRecord> JobStore::Unfinished() {
   return jobs;
 }
 
+std::vector<JobRecord> JobStore::Ended() {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare(std::string("SELECT ") + kColumns +
+                            " FROM jobs WHERE state NOT IN (1, 2) ORDER BY finished_unix_ms, rowid");
+  std::vector<JobRecord> jobs;
+  while (s.Step()) jobs.push_back(ReadRow(s));
+  return jobs;
+}
+
+bool JobStore::Delete(const std::string& id) {
+  WriteTransaction tx(db_);
+  Statement s = db_.Prepare("DELETE FROM jobs WHERE id = ?");
+  s.Bind(1, id);
+  s.Run();
+  const bool deleted = db_.Changes() > 0;
+  tx.Commit();
+  return deleted;
+}
+
 void JobStore::SetState(const std::string& id, JobState state, const std::string& message) {
   WriteTransaction tx(db_);
   Statement s = db_.Prepare("UPDATE jobs SET state = ?, message = ? WHERE id = ?");

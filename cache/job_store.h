@@ -60,6 +60,10 @@ class JobStore {
   std::vector<JobRecord> List(int limit, const std::string& owner = "");
   // Jobs a restarted server must resume, oldest first.
   std::vector<JobRecord> Unfinished();
+  // Ended jobs (DONE, FAILED, CANCELLED), the longest ended first.
+  std::vector<JobRecord> Ended();
+  // Removes the record; false when there was none.
+  bool Delete(const std::string& id);
   void SetState(const std::string& id, JobState state, const std::string& message);
   void SetProgress(const std::string& id, const JobProgress& progress);
   // Moves the job to a terminal state with its summary and products.

@@ -24,6 +24,7 @@ Command AddMapCommand(CLI::App& parent);
 Command AddJobsCommand(CLI::App& parent);
 Command AddWatchCommand(CLI::App& parent);
 Command AddCancelCommand(CLI::App& parent);
+Command AddDeleteCommand(CLI::App& parent);
 Command AddDownloadCommand(CLI::App& parent);
 
 // Traction curves (cli_curve.cc).

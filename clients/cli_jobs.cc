@@ -218,6 +218,18 @@ int RunCancel(Client& client, const std::string& id) {
   return kExitOk;
 }
 
+int RunDelete(Client& client, const std::string& id) {
+  grpc::ClientContext ctx;
+  v1::DeleteJobRequest req;
+  req.set_job_id(id);
+  v1::DeleteJobResponse response;
+  const grpc::Status s = client.stub().DeleteJob(&ctx, req, &response);
+  if (!s.ok()) return Fail(s);
+  std::cout << id << " deleted, " << std::fixed << std::setprecision(1)
+            << response.bytes_freed() / 1048576.0 << " MiB freed\n";
+  return kExitOk;
+}
+
 int RunDownload(Client& client, const std::string& id, const std::string& out_dir) {
   std::vector<std::string> written;
   const grpc::Status s = client.Download(id, out_dir, &written);
@@ -283,6 +295,14 @@ Command AddCancelCommand(CLI::App& parent) {
   CLI::App* cancel = parent.add_subcommand("cancel", "cancel a queued or running job");
   AddJobId(*cancel, id.get());
   return {cancel, [id](Client& client) { return RunCancel(client, *id); }};
+}
+
+Command AddDeleteCommand(CLI::App& parent) {
+  auto id = std::make_shared<std::string>();
+  CLI::App* del = parent.add_subcommand(
+      "delete", "delete an ended job: its record, inputs and products (its curves stay cached)");
+  AddJobId(*del, id.get());
+  return {del, [id](Client& client) { return RunDelete(client, *id); }};
 }
 
 Command AddDownloadCommand(CLI::App& parent) {

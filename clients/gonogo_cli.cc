@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
   AddGlobalOptions(app, &server, &connection);
   const std::vector<Command> commands = {
       AddMapCommand(app),         AddJobsCommand(app),     AddWatchCommand(app),
-      AddCancelCommand(app),      AddDownloadCommand(app), AddCurveCommand(app),
+      AddCancelCommand(app),      AddDeleteCommand(app),   AddDownloadCommand(app), AddCurveCommand(app),
       AddScalabilityCommand(app), AddTiersCommand(app),    AddSoilsCommand(app),
       AddModelsCommand(app),      AddTrainCommand(app),    AddDatasetCommand(app)};
   // After the subcommands: they would inherit it.

@@ -15,7 +15,7 @@ terrain=$root/out/sample-terrain
 /usr/bin/python3 "$root/clients/sample-data/make_sample_terrain.py" --out "$terrain" --size 200
 
 endpoint_file=$(mktemp)
-"$build/server/gonogo-server" --data-dir "$data" --listen 127.0.0.1:0 \
+"$root/deploy/gonogo-supervise" -- "$build/server/gonogo-server" --data-dir "$data" --listen 127.0.0.1:0 \
   --endpoint-file "$endpoint_file" > "$root/out/gonogo-server.log" 2>&1 &
 server_pid=$!
 trap 'kill -TERM $server_pid 2>/dev/null; wait $server_pid 2>/dev/null; rm -f "$endpoint_file"' EXIT

@@ -31,7 +31,7 @@ v1::Job JobManager::SubmitCurve(const std::string& id, const std::string& owner,
   rec.name = "traction curve";
   rec.tier = tier.Name();
   rec.request = request.SerializeAsString();
-  return Enqueue(std::move(rec), nullptr);
+  return Enqueue(std::move(rec));
 }
 
 // A curve job: one task through the resolver, the solver's progress as the job's, the curve as its
@@ -82,9 +82,7 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
     }
     if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
     if (stopping && answer.source == CurveSource::kCancelled) {
-      jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
-      spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
-      return;
+      return Requeue(id);
     }
     if (!answer.ok()) {
       return Finish(id, cache::JobState::kFailed,

@@ -146,12 +146,24 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
       }
     }
   }
+  // The work the map makes, bounded before it is accepted.
+  const MapPlan plan = PlanMap(*terrain, vehicle, soil_table, tier,
+                               TractionRequest::SlipSweep(CriteriaFromProto(request.criteria()).slip_step),
+                               request.surrogate_model());
+  if (static_cast<int64_t>(plan.tasks.size()) > config_.max_tasks_per_job) {
+    throw LimitError("vehicle.axles",
+                     "the map needs " + std::to_string(plan.tasks.size()) + " traction curves (" +
+                         std::to_string(plan.units.size()) + " terrain units x " +
+                         std::to_string(vehicle.axles.size()) +
+                         " axles), above the server's limit of " +
+                         std::to_string(config_.max_tasks_per_job) +
+                         " (gonogo-server --max-tasks-per-job)");
+  }
   return terrain;
 }
 
 v1::Job JobManager::Submit(const std::string& id, const std::string& owner,
-                           const v1::MapRequest& request,
-                           std::shared_ptr<geo::TerrainLayers> terrain) {
+                           const v1::MapRequest& request) {
   cache::JobRecord rec;
   rec.id = id;
   rec.owner = owner;
@@ -159,25 +171,50 @@ v1::Job JobManager::Submit(const std::string& id, const std::string& owner,
   rec.name = request.name();
   rec.tier = request.tier();
   rec.request = request.SerializeAsString();
-  return Enqueue(std::move(rec), std::move(terrain));
+  return Enqueue(std::move(rec));
 }
 
-v1::Job JobManager::Enqueue(cache::JobRecord rec, std::shared_ptr<geo::TerrainLayers> terrain) {
+v1::Job JobManager::Enqueue(cache::JobRecord rec) {
   const std::string id = rec.id;
   rec.state = cache::JobState::kQueued;
   rec.message = "queued";
   rec.created_unix_ms = NowMs();
-  jobs_.Create(rec);
   {
+    // The count and the insertion under one lock, so that concurrent submissions cannot overfill.
     std::lock_guard<std::mutex> lock(mutex_);
+    int queued_of_owner = 0;
+    for (const std::string& queued : queue_) queued_of_owner += live_[queued]->owner == rec.owner;
+    if (static_cast<int>(queue_.size()) >= config_.max_queued_jobs) {
+      throw LimitError("jobs", "the server's queue holds its limit of " +
+                                   std::to_string(config_.max_queued_jobs) +
+                                   " jobs (gonogo-server --max-queued-jobs); try again later");
+    }
+    if (queued_of_owner >= config_.max_queued_jobs_per_identity) {
+      throw LimitError("jobs", "you have " + std::to_string(queued_of_owner) +
+                                   " jobs queued, the limit per identity "
+                                   "(gonogo-server --max-queued-per-identity); wait for some to "
+                                   "start or cancel them");
+    }
+    jobs_.Create(rec);
     auto live = std::make_shared<Live>();
     live->status = StatusOf(rec);
-    live->terrain = std::move(terrain);
+    live->owner = rec.owner;
     live_[id] = live;
     queue_.push_back(id);
   }
   changed_.notify_all();
   return JobOf(rec);
+}
+
+int JobManager::CollectOrphanUploads() {
+  const fs::path jobs_dir = fs::path(config_.data_dir) / "jobs";
+  if (!fs::exists(jobs_dir)) return 0;
+  std::vector<fs::path> orphans;
+  for (const auto& entry : fs::directory_iterator(jobs_dir)) {
+    if (!jobs_.Get(entry.path().filename().string())) orphans.push_back(entry.path());
+  }
+  for (const fs::path& orphan : orphans) fs::remove_all(orphan);
+  return static_cast<int>(orphans.size());
 }
 
 int JobManager::ResumeUnfinished() {
@@ -190,6 +227,7 @@ int JobManager::ResumeUnfinished() {
     std::lock_guard<std::mutex> lock(mutex_);
     auto live = std::make_shared<Live>();
     live->status = StatusOf(queued);
+    live->owner = rec.owner;
     live_[rec.id] = live;
     queue_.push_back(rec.id);
     ++n;
@@ -201,6 +239,75 @@ void JobManager::Start() {
   for (int i = 0; i < std::max(1, config_.max_concurrent_jobs); ++i) {
     threads_.emplace_back([this] { Loop(); });
   }
+  threads_.emplace_back([this] { RetentionLoop(); });
+}
+
+namespace {
+// Bytes of the regular files under `dir` (0 when it does not exist).
+int64_t DirectoryBytes(const fs::path& dir) {
+  std::error_code ec;
+  int64_t bytes = 0;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_regular_file(ec)) bytes += static_cast<int64_t>(it->file_size(ec));
+  }
+  return bytes;
+}
+}  // namespace
+
+int64_t JobManager::Delete(const std::string& id) {
+  const std::optional<cache::JobRecord> rec = jobs_.Get(id);
+  if (!rec) throw InputError("job_id", "no job '" + id + "'");
+  if (!cache::IsTerminal(rec->state)) {
+    throw PreconditionError("job_id", "job '" + id + "' is " + cache::JobStateName(rec->state) +
+                                          "; cancel it first");
+  }
+  const int64_t bytes = DirectoryBytes(JobDir(id));
+  // The record first: a crash between the two leaves files that the next start collects
+  // (CollectOrphanUploads), never a record without its files.
+  jobs_.Delete(id);
+  std::error_code ignored;
+  fs::remove_all(JobDir(id), ignored);
+  spdlog::info("job {} deleted ({} bytes of files)", id, bytes);
+  return bytes;
+}
+
+int JobManager::SweepRetention() {
+  const std::vector<cache::JobRecord> ended = jobs_.Ended();  // the longest ended first
+  const int64_t now = NowMs();
+  int deleted = 0;
+  std::vector<std::pair<std::string, int64_t>> kept;  // id, bytes; oldest first
+  int64_t kept_bytes = 0;
+  for (const cache::JobRecord& rec : ended) {
+    const double age_days = (now - rec.finished_unix_ms) / 86'400'000.0;
+    if (config_.keep_jobs_days > 0 && age_days > config_.keep_jobs_days) {
+      Delete(rec.id);
+      ++deleted;
+      continue;
+    }
+    kept.emplace_back(rec.id, DirectoryBytes(JobDir(rec.id)));
+    kept_bytes += kept.back().second;
+  }
+  for (size_t i = 0; config_.keep_jobs_bytes > 0 && kept_bytes > config_.keep_jobs_bytes && i < kept.size(); ++i) {
+    Delete(kept[i].first);
+    kept_bytes -= kept[i].second;
+    ++deleted;
+  }
+  if (deleted > 0) spdlog::info("retention: deleted {} ended jobs (gonogo-server --keep-jobs-days, --keep-jobs-gib)", deleted);
+  return deleted;
+}
+
+void JobManager::RetentionLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  do {
+    lock.unlock();
+    try {
+      SweepRetention();
+    } catch (const std::exception& e) {
+      spdlog::error("retention sweep failed: {}", e.what());
+    }
+    lock.lock();
+  } while (!changed_.wait_for(lock, std::chrono::milliseconds(config_.retention_sweep_ms),
+                              [this] { return stopping_; }));
 }
 
 void JobManager::Drain() {
@@ -253,6 +360,12 @@ void JobManager::Finish(const std::string& id, cache::JobState state, const std:
   }
 }
 
+void JobManager::Requeue(const std::string& id) {
+  jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
+  if (auto rec = jobs_.Get(id)) Publish(id, StatusOf(*rec));
+  spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
+}
+
 void JobManager::Publish(const std::string& id, const v1::JobStatus& status) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -301,9 +414,18 @@ v1::Job JobManager::Cancel(const std::string& id) {
       queued = true;
     }
   }
-  if (queued) Finish(id, cache::JobState::kCancelled, "cancelled before it started", "", {});
+  if (queued) {
+    Finish(id, cache::JobState::kCancelled, "cancelled before it started", "", {});
+    std::error_code ignored;
+    fs::remove_all(JobDir(id), ignored);  // its uploaded inputs: nothing of it is left
+  }
   changed_.notify_all();
   return *GetJob(id);
+}
+
+bool JobManager::stopping() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stopping_;
 }
 
 std::optional<std::pair<v1::JobStatus, uint64_t>> JobManager::WaitStatus(const std::string& id,
@@ -315,7 +437,12 @@ std::optional<std::pair<v1::JobStatus, uint64_t>> JobManager::WaitStatus(const s
     if (it != live_.end()) {
       auto live = it->second;
       changed_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
-                        [&] { return live->version != seen || stopping_; });
+                        [&] {
+                          // While draining, a running job is waited for until it is QUEUED again;
+                          // a queued one answers at once, so that its watcher can end.
+                          return live->version != seen ||
+                                 (stopping_ && live->status.state() != v1::JOB_STATE_RUNNING);
+                        });
       return std::make_pair(live->status, live->version);
     }
   }
@@ -348,8 +475,7 @@ void JobManager::RunJob(const std::string& id) {
     report("loading terrain", false);
     v1::MapRequest request;
     Require(request.ParseFromString(rec->request), "request", "stored request is unreadable");
-    std::shared_ptr<geo::TerrainLayers> terrain = std::move(live->terrain);
-    if (!terrain) terrain = Validate(request, InputsOf(id));
+    const std::shared_ptr<geo::TerrainLayers> terrain = Validate(request, InputsOf(id));
     const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
     const mobility::Criteria criteria = CriteriaFromProto(request.criteria());
     const TractionTier& tier = tiers_.Get(request.tier());
@@ -428,9 +554,7 @@ void JobManager::RunJob(const std::string& id) {
     if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
     if (!failure.empty()) return Finish(id, cache::JobState::kFailed, failure, "", {});
     if (stopping) {
-      jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
-      spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
-      return;
+      return Requeue(id);
     }
 
     report("evaluating cells", true);

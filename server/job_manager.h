@@ -40,6 +40,16 @@ struct JobManagerConfig {
   // the fe-ann model registry (solvers/tiers/surrogate_registry.h); empty: no training jobs.
   std::string fe_de_preset = "default";
   std::string models_dir;
+  // Bounds on what the queue may hold (README "Security and limits"); a submission beyond one is
+  // refused with LimitError naming it.
+  int64_t max_tasks_per_job = 50'000;   // traction tasks of one map: terrain units x axles
+  int max_queued_jobs = 1'000;          // QUEUED jobs of every identity together
+  int max_queued_jobs_per_identity = 100;
+  // Retention of ended jobs (their records, inputs and products; curves stay in the cache): older
+  // than this many days, or, oldest first, beyond this many bytes of job files. 0: no such limit.
+  double keep_jobs_days = 30;
+  int64_t keep_jobs_bytes = 50LL << 30;
+  int retention_sweep_ms = 3'600'000;  // between sweeps; one also runs at Start()
 };
 
 // Paths of a job's stored input rasters (empty when not sent).
@@ -58,15 +68,17 @@ class JobManager {
   std::string JobDir(const std::string& job_id) const;
   const std::string& data_dir() const { return config_.data_dir; }
 
-  // Validates everything a job needs before it is accepted: vehicle, criteria, tier, soil table and
-  // the rasters themselves. Throws InputError / LimitError naming the field. Returns the loaded
-  // terrain so that the job does not read it twice.
+  // Validates everything a job needs before it is accepted: vehicle, criteria, tier, soil table, the
+  // rasters themselves and the number of traction tasks they make. Throws InputError / LimitError
+  // naming the field. Returns the loaded terrain.
   std::shared_ptr<geo::TerrainLayers> Validate(const v1::MapRequest& request,
                                                const JobInputs& inputs) const;
-  // Persists the job (QUEUED), owned by the identity `owner`, and queues it. `terrain` may be null
-  // (it is then read from the inputs).
-  v1::Job Submit(const std::string& job_id, const std::string& owner, const v1::MapRequest& request,
-                 std::shared_ptr<geo::TerrainLayers> terrain);
+  // Removes the directories under jobs/ that belong to no job: uploads a crash or a kill cut short.
+  // Call before serving; returns how many it removed.
+  int CollectOrphanUploads();
+  // Persists the job (QUEUED), owned by the identity `owner`, and queues it. A queued job holds no
+  // terrain in memory: its run reads the stored inputs. Throws LimitError when the queue is full.
+  v1::Job Submit(const std::string& job_id, const std::string& owner, const v1::MapRequest& request);
   // Validates a curve query (tier, tyre, load, soil: InputError naming the field) and persists it
   // as a job of kind "curve" (QUEUED).
   v1::Job SubmitCurve(const std::string& job_id, const std::string& owner,
@@ -85,8 +97,16 @@ class JobManager {
   std::optional<v1::Job> GetJob(const std::string& job_id);
   // Newest first; with a non-empty `owner`, that identity's jobs only.
   std::vector<v1::Job> ListJobs(int limit, const std::string& owner);
-  // Throws InputError("job_id") when unknown; returns the job after the request.
+  // Throws InputError("job_id") when unknown; returns the job after the request. A job cancelled
+  // before it started leaves no files.
   v1::Job Cancel(const std::string& job_id);
+  // Deletes an ended job: its record and files. Returns the bytes freed. InputError("job_id") when
+  // unknown; PreconditionError while it is queued or running.
+  int64_t Delete(const std::string& job_id);
+  // Applies the retention limits (JobManagerConfig::keep_jobs_*); returns how many jobs it deleted.
+  int SweepRetention();
+  // True once Drain() has begun.
+  bool stopping();
   // Waits until the job's status changes from `seen_version` or `timeout_ms` passes; returns the
   // current status and its version. Unknown job: nullopt.
   std::optional<std::pair<v1::JobStatus, uint64_t>> WaitStatus(const std::string& job_id,
@@ -98,19 +118,23 @@ class JobManager {
     v1::JobStatus status;
     uint64_t version = 1;
     std::atomic<bool> cancel_requested{false};
-    std::shared_ptr<geo::TerrainLayers> terrain;  // loaded at submission, read by the run
+    std::string owner;
   };
   void Loop();
+  void RetentionLoop();
   void RunJob(const std::string& job_id);
   void RunCurveJob(const cache::JobRecord& record, const std::shared_ptr<Live>& live);
   void RunTrainJob(const cache::JobRecord& record, const std::shared_ptr<Live>& live);
-  // Persists a new QUEUED job and queues it.
-  v1::Job Enqueue(cache::JobRecord record, std::shared_ptr<geo::TerrainLayers> terrain);
+  // Persists a new QUEUED job and queues it; LimitError when the queue is full.
+  v1::Job Enqueue(cache::JobRecord record);
   void Publish(const std::string& job_id, const v1::JobStatus& status);
   // Sets a running job's message, publishes `status` to watchers and, with `persist`, writes its
   // progress to the job store.
   void ReportProgress(const std::string& job_id, v1::JobStatus& status, const std::string& message,
                       bool persist);
+  // A running job the drain interrupted: QUEUED again (persisted, published to watchers), so that
+  // the next start resumes it.
+  void Requeue(const std::string& job_id);
   // Moves a job to its end state (persisted, published to watchers, logged).
   void Finish(const std::string& job_id, cache::JobState state, const std::string& message,
               const std::string& summary, const std::vector<std::string>& products);

@@ -54,7 +54,15 @@ struct Options {
   int64_t max_cells = 25'000'000;
   int max_jobs = 2;
   int64_t max_upload_mib = 512;
+  int64_t max_upload_chunks = 8192;
   double curve_timeout_s = 1800;
+  double stream_stall_s = 60;
+  double keep_jobs_days = 30;
+  double keep_jobs_gib = 50;
+  int64_t max_tasks_per_job = 50'000;
+  int max_queued_jobs = 1'000;
+  int max_queued_per_identity = 100;
+  int max_rpc_threads = 64;
   bool diagnostic_tiers = false;
   std::string log_level = "info";
   std::string token_file;
@@ -85,6 +93,29 @@ Options Parse(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   app.add_option("--max-upload-mib", o.max_upload_mib, "largest upload of one map job, all rasters together, MiB")
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 20));
+  app.add_option("--max-upload-chunks", o.max_upload_chunks,
+                 "most messages in one upload, empty ones included")
+      ->check(CLI::Range(int64_t{16}, int64_t{1} << 30));
+  app.add_option("--max-tasks-per-job", o.max_tasks_per_job,
+                 "most traction curves one map may need (terrain units x axles)")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40));
+  app.add_option("--max-queued-jobs", o.max_queued_jobs, "most QUEUED jobs, all identities together")
+      ->check(CLI::Range(1, 1 << 30));
+  app.add_option("--max-queued-per-identity", o.max_queued_per_identity, "most QUEUED jobs of one identity")
+      ->check(CLI::Range(1, 1 << 30));
+  app.add_option("--max-rpc-threads", o.max_rpc_threads,
+                 "most calls served at once (open streams included); beyond it a call gets "
+                 "RESOURCE_EXHAUSTED")
+      ->check(CLI::Range(4, 1 << 16));
+  app.add_option("--keep-jobs-days", o.keep_jobs_days,
+                 "ended jobs older than this are deleted (their curves stay cached); 0: kept")
+      ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--keep-jobs-gib", o.keep_jobs_gib,
+                 "beyond this much job files (inputs, products), ended jobs are deleted oldest first; 0: no limit")
+      ->check(CLI::Range(0.0, 1e9));
+  app.add_option("--stream-stall-s", o.stream_stall_s,
+                 "an upload or download that moves nothing for this long is cancelled, s")
+      ->check(CLI::Range(0.1, 86400.0));
   app.add_option("--curve-timeout-s", o.curve_timeout_s,
                  "longest a GetTractionCurve or RunScalability call waits for the pool, s")
       ->check(CLI::Range(1.0, 86400.0));
@@ -238,6 +269,11 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   config.limits.max_input_cells = o.max_cells;
   config.limits.max_output_cells = o.max_cells;
   config.max_concurrent_jobs = o.max_jobs;
+  config.max_tasks_per_job = o.max_tasks_per_job;
+  config.keep_jobs_days = o.keep_jobs_days;
+  config.keep_jobs_bytes = static_cast<int64_t>(o.keep_jobs_gib * (1LL << 30));
+  config.max_queued_jobs = o.max_queued_jobs;
+  config.max_queued_jobs_per_identity = o.max_queued_per_identity;
   config.fe_de_preset = o.tier_options.fe_de_preset;
   config.models_dir = o.tier_options.models_dir;
   cache::CurveStore curves(db);
@@ -246,10 +282,14 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   // directory must be on a file system they share.
   resolver.set_checkpoint_root((std::filesystem::path(o.data_dir) / "checkpoints").string());
   server::JobManager jobs(config, db, tiers, resolver);
+  const int orphans = jobs.CollectOrphanUploads();
+  if (orphans > 0) spdlog::info("removed the files of {} uploads that never became a job", orphans);
   const int resumed = jobs.ResumeUnfinished();
   server::ServiceLimits limits;
   limits.max_upload_bytes = o.max_upload_mib << 20;
   limits.curve_timeout_ms = static_cast<int>(o.curve_timeout_s * 1000);
+  limits.max_upload_chunks = o.max_upload_chunks;
+  limits.stream_stall_ms = static_cast<int>(o.stream_stall_s * 1000);
   server::MobilityServiceImpl service(jobs, db, tiers, resolver, authenticator, limits,
                                      o.tier_options.models_dir);
   const int abandoned = tiers::SurrogateRegistry(o.tier_options.models_dir).CollectAbandoned();
@@ -262,6 +302,11 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   builder.AddListeningPort(o.listen, transport.credentials, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(8 << 20);
+  // Every call the synchronous server serves holds a thread, an open stream too: bounded, so that
+  // held-open streams cannot take the process's threads without end.
+  grpc::ResourceQuota quota("gonogo-server");
+  quota.SetMaxThreads(o.max_rpc_threads);
+  builder.SetResourceQuota(quota);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
     spdlog::error("cannot listen on {}", o.listen);
@@ -288,10 +333,19 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   service.SetDraining();
   server->GetHealthCheckService()->SetServingStatus(kServiceName, false);
   server->GetHealthCheckService()->SetServingStatus("", false);
+  const auto drain_start = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   jobs.Drain();
-  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  const double drain_s = seconds_since(drain_start);
+  // Calls still in flight (a download, a watcher) get a second, then are cancelled: a drain is
+  // over within about a second whatever the jobs.
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(1));
+  const double calls_s = seconds_since(drain_start);
   pool.Shutdown();
-  spdlog::info("stopped");
+  spdlog::info("stopped: jobs drained in {:.2f} s, calls ended in {:.2f} s, pool stopped in {:.2f} s",
+               drain_s, calls_s, seconds_since(drain_start));
   return 0;
 }
 

@@ -1,5 +1,8 @@
 #include "server/service.h"
 
+#include <cerrno>
+#include <cstring>
+
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
@@ -25,6 +28,31 @@ namespace {
 
 constexpr size_t kChunkBytes = 1 << 20;
 
+// LimitError (RESOURCE_EXHAUSTED) naming `field` when `text` is longer than `max_bytes`.
+void RequireShort(const std::string& text, size_t max_bytes, const std::string& field) {
+  if (text.size() > max_bytes) {
+    throw LimitError(field, "is " + std::to_string(text.size()) + " bytes long; the limit is " +
+                                std::to_string(max_bytes));
+  }
+}
+
+// The names a map request stores and echoes.
+void RequireShortNames(const v1::MapRequest& request) {
+  RequireShort(request.name(), kMaxNameBytes, "name");
+  RequireShort(request.vehicle().name(), kMaxNameBytes, "vehicle.name");
+  RequireShort(request.vehicle().description(), kMaxTextBytes, "vehicle.description");
+  RequireShort(request.surrogate_model(), kMaxIdBytes, "surrogate_model");
+  if (request.soil_table().classes_size() > 256) {
+    throw LimitError("soil_table.classes", "at most 256 soil classes (got " +
+                                               std::to_string(request.soil_table().classes_size()) + ")");
+  }
+  for (const auto& c : request.soil_table().classes()) {
+    const std::string field = "soil_table.classes[code " + std::to_string(c.code()) + "]";
+    RequireShort(c.name(), kMaxNameBytes, field + ".name");
+    RequireShort(c.bekker_soil(), kMaxNameBytes, field + ".bekker_soil");
+  }
+}
+
 const char* RoleFileName(v1::RasterRole role) {
   switch (role) {
     case v1::RASTER_ROLE_CONE_INDEX: return "cone_index.tif";
@@ -45,9 +73,23 @@ std::string CsvQuoted(const std::string& text) {
 
 fs::path ExportsDir(const std::string& data_dir) { return fs::path(data_dir) / "exports"; }
 
+// A write to the server's own disk failed: the server's failure (RESOURCE_EXHAUSTED when the disk
+// is full, INTERNAL otherwise), never reported as the user's bad input.
+[[noreturn]] void ThrowStorageFailure(const fs::path& path, int error_number) {
+  if (error_number == ENOSPC || error_number == EDQUOT) {
+    throw LimitError("server", "the server's disk is full: it could not store " +
+                                   path.filename().string() + "; nothing was kept, try again later");
+  }
+  throw std::runtime_error("the server could not write " + path.filename().string() + ": " +
+                           std::strerror(error_number));
+}
+
 // Streams the files `names` of `dir`, one after another, in chunks of at most kChunkBytes.
+// A client that stops reading is cancelled by `stall_watch`.
 grpc::Status StreamFiles(grpc::ServerContext* context, grpc::ServerWriter<v1::ResultChunk>* writer,
-                         const fs::path& dir, const std::vector<std::string>& names) {
+                         const fs::path& dir, const std::vector<std::string>& names,
+                         StallWatch& stall_watch) {
+  StallWatch::Guard guard(stall_watch, context);
   std::string buffer(kChunkBytes, '\0');
   for (const std::string& name : names) {
     const fs::path path = dir / name;
@@ -64,6 +106,7 @@ grpc::Status StreamFiles(grpc::ServerContext* context, grpc::ServerWriter<v1::Re
       chunk.set_total_bytes(total);
       chunk.set_data(buffer.data(), n);
       if (context->IsCancelled() || !writer->Write(chunk)) return grpc::Status::CANCELLED;
+      guard.Touch();
       offset += n;
     } while (offset < total);
   }
@@ -83,6 +126,7 @@ MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
       tiers_(tiers),
       resolver_(resolver),
       limits_(limits),
+      stall_watch_(std::chrono::milliseconds(limits.stream_stall_ms)),
       models_dir_(std::move(models_dir)) {
   // Dataset exports are staged here while they stream; what a crash left is of no use.
   std::error_code ignored;
@@ -91,6 +135,11 @@ MobilityServiceImpl::MobilityServiceImpl(JobManager& jobs, cache::Database& db,
 
 grpc::Status MobilityServiceImpl::VisibleJob(const std::string& job_id, const Identity& caller,
                                              v1::Job* job) {
+  if (job_id.size() > kMaxIdBytes) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED,
+            "job_id: is " + std::to_string(job_id.size()) + " bytes long; the limit is " +
+                std::to_string(kMaxIdBytes)};
+  }
   auto found = jobs_.GetJob(job_id);
   if (!found || (!caller.admin && found->owner() != caller.name)) {
     return {grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id + "'"};
@@ -121,11 +170,20 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext* context,
     Require(reader->Read(&message) && message.has_request(), "request",
             "the first message must carry the MapRequest");
     const v1::MapRequest request = message.request();
+    RequireShortNames(request);
     fs::create_directories(inputs_dir);
     std::map<v1::RasterRole, std::ofstream> files;
     JobInputs inputs;
     int64_t received = 0;
+    int64_t chunks = 0;
+    StallWatch::Guard stall_guard(stall_watch_, context);
     while (reader->Read(&message)) {
+      stall_guard.Touch();
+      if (++chunks > limits_.max_upload_chunks) {
+        throw LimitError("chunk", "the upload exceeds the server's limit of " +
+                                      std::to_string(limits_.max_upload_chunks) +
+                                      " chunks, empty ones included (gonogo-server --max-upload-chunks)");
+      }
       Require(message.has_chunk(), "request", "only the first message may carry the MapRequest");
       const char* name = RoleFileName(message.chunk().role());
       Require(name != nullptr, "chunk.role", "unknown raster role");
@@ -139,9 +197,16 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext* context,
       if (!out.is_open()) out.open(inputs_dir / name, std::ios::binary);
       out.write(message.chunk().data().data(),
                 static_cast<std::streamsize>(message.chunk().data().size()));
+      if (!out) ThrowStorageFailure(inputs_dir / name, errno);
+    }
+    if (stall_guard.stalled()) {
+      throw LimitError("chunk", "no message for " +
+                                    std::to_string(limits_.stream_stall_ms / 1000) +
+                                    " s: the upload timed out (gonogo-server --stream-stall-s)");
     }
     for (auto& [role, stream] : files) {
       stream.close();
+      if (!stream) ThrowStorageFailure(inputs_dir / RoleFileName(role), errno);
       const std::string path = (inputs_dir / RoleFileName(role)).string();
       switch (role) {
         case v1::RASTER_ROLE_CONE_INDEX: inputs.cone_index = path; break;
@@ -151,8 +216,10 @@ grpc::Status MobilityServiceImpl::SubmitMap(grpc::ServerContext* context,
         default: break;
       }
     }
-    auto terrain = jobs_.Validate(request, inputs);
-    *response = jobs_.Submit(id, caller.name, request, std::move(terrain));
+    jobs_.Validate(request, inputs);
+    // A client that gave up after its last chunk gets no job created behind its back.
+    if (context->IsCancelled()) return grpc::Status::CANCELLED;
+    *response = jobs_.Submit(id, caller.name, request);
     cleanup.keep = true;
     return grpc::Status::OK;
   } catch (...) {
@@ -180,6 +247,11 @@ grpc::Status MobilityServiceImpl::WatchJob(grpc::ServerContext* context,
         state == v1::JOB_STATE_CANCELLED) {
       return grpc::Status::OK;
     }
+    if (state == v1::JOB_STATE_QUEUED && jobs_.stopping()) {
+      return {grpc::StatusCode::UNAVAILABLE,
+              "server is shutting down: job '" + request->job_id() +
+                  "' is QUEUED and resumes when the server starts again"};
+    }
   }
   return grpc::Status::CANCELLED;
 }
@@ -202,6 +274,8 @@ grpc::Status MobilityServiceImpl::ListJobs(grpc::ServerContext* context, const v
   try {
     const int limit = request->limit() == 0 ? 50 : static_cast<int>(std::min(request->limit(), 1000u));
     for (auto& job : jobs_.ListJobs(limit, caller.admin ? "" : caller.name)) {
+      // The newest that fit in one answer a client accepts.
+      if (response->ByteSizeLong() + job.ByteSizeLong() > limits_.max_page_bytes) break;
       *response->add_jobs() = std::move(job);
     }
     return grpc::Status::OK;
@@ -233,6 +307,21 @@ grpc::Status MobilityServiceImpl::CancelJob(grpc::ServerContext* context,
   }
 }
 
+grpc::Status MobilityServiceImpl::DeleteJob(grpc::ServerContext* context,
+                                            const v1::DeleteJobRequest* request,
+                                            v1::DeleteJobResponse* response) {
+  Identity caller;
+  if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
+  try {
+    v1::Job job;
+    if (grpc::Status hidden = VisibleJob(request->job_id(), caller, &job); !hidden.ok()) return hidden;
+    response->set_bytes_freed(static_cast<uint64_t>(jobs_.Delete(request->job_id())));
+    return grpc::Status::OK;
+  } catch (...) {
+    return ToStatus(std::current_exception());
+  }
+}
+
 grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
                                                  const v1::DownloadResultRequest* request,
                                                  grpc::ServerWriter<v1::ResultChunk>* writer) {
@@ -248,9 +337,12 @@ grpc::Status MobilityServiceImpl::DownloadResult(grpc::ServerContext* context,
     if (request->product().empty() || request->product() == p) wanted.push_back(p);
   }
   if (wanted.empty()) {
+    if (request->product().size() > kMaxIdBytes) {
+      return {grpc::StatusCode::NOT_FOUND, "product: job has no product of that name"};
+    }
     return {grpc::StatusCode::NOT_FOUND, "product: job has no product '" + request->product() + "'"};
   }
-  return StreamFiles(context, writer, fs::path(jobs_.JobDir(request->job_id())) / "out", wanted);
+  return StreamFiles(context, writer, fs::path(jobs_.JobDir(request->job_id())) / "out", wanted, stall_watch_);
 }
 
 grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
@@ -317,6 +409,7 @@ grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext* contex
   try {
     int64_t before = 0;
     if (!request->page_token().empty()) {
+      RequireShort(request->page_token(), kMaxIdBytes, "page_token");
       try {
         before = std::stoll(request->page_token());
       } catch (...) {
@@ -328,8 +421,19 @@ grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext* contex
     cache::CurveFilter filter{request->tier(), request->soil_name(), request->min_cone_index_pa(),
                               request->max_cone_index_pa()};
     const cache::CurvePage page = curves_.List(filter, page_size, before);
-    for (const auto& c : page.curves) FillCurve(c, true, response->add_curves());
-    if (page.next_after_id) response->set_next_page_token(std::to_string(page.next_after_id));
+    int64_t next_before = page.next_after_id;
+    for (size_t i = 0; i < page.curves.size(); ++i) {
+      v1::TractionCurve curve;
+      FillCurve(page.curves[i], true, &curve);
+      // A page stops short of the entries that would not fit in one answer a client accepts; the
+      // next page starts with them.
+      if (i > 0 && response->ByteSizeLong() + curve.ByteSizeLong() > limits_.max_page_bytes) {
+        next_before = page.row_ids[i - 1];
+        break;
+      }
+      *response->add_curves() = std::move(curve);
+    }
+    if (next_before) response->set_next_page_token(std::to_string(next_before));
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());
@@ -448,6 +552,9 @@ grpc::Status MobilityServiceImpl::TrainSurrogate(grpc::ServerContext* context,
   if (grpc::Status denied = Authenticate(*context, &caller); !denied.ok()) return denied;
   try {
     if (draining_) return {grpc::StatusCode::UNAVAILABLE, "server is shutting down"};
+    RequireShort(request->soil_name(), kMaxNameBytes, "soil_name");
+    RequireShort(request->from_model(), kMaxIdBytes, "from_model");
+    RequireShort(request->name(), kMaxNameBytes, "name");
     *response = jobs_.SubmitTraining(jobs_.NewJobId(), caller.name, *request);
     return grpc::Status::OK;
   } catch (...) {
@@ -543,7 +650,7 @@ grpc::Status MobilityServiceImpl::ExportDataset(grpc::ServerContext* context,
     }
     index.close();
     if (!index) return {grpc::StatusCode::INTERNAL, "cannot write the dataset's index"};
-    return StreamFiles(context, writer, staging.dir, names);
+    return StreamFiles(context, writer, staging.dir, names, stall_watch_);
   } catch (...) {
     return ToStatus(std::current_exception());
   }

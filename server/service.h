@@ -12,6 +12,7 @@
 #include "server/curve_resolver.h"
 #include "server/identity.h"
 #include "server/job_manager.h"
+#include "server/stall_watch.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
 
@@ -23,7 +24,20 @@ struct ServiceLimits {
   // GetTractionCurve's wait for the pool: an fe-classic curve takes minutes on one core
   // (--curve-timeout-s).
   int curve_timeout_ms = 30 * 60 * 1000;
+  // Messages of one upload, empty ones included (--max-upload-chunks).
+  int64_t max_upload_chunks = 8192;
+  // A list answer stops adding entries at this size, under the 4 MiB a gRPC client accepts by
+  // default; ListTractionCurves then pages on, ListJobs returns the newest that fit.
+  size_t max_page_bytes = 3 << 20;
+  // An upload or download stream that moves no message for this long is cancelled
+  // (--stream-stall-s).
+  int stream_stall_ms = 60'000;
 };
+
+// Strings a request may carry, bounded before anything is stored or echoed back.
+inline constexpr size_t kMaxNameBytes = 256;  // job, vehicle, soil and model names
+inline constexpr size_t kMaxIdBytes = 64;     // job ids, product names, page tokens
+inline constexpr size_t kMaxTextBytes = 4096; // free text: a vehicle's description
 
 class MobilityServiceImpl final : public v1::MobilityService::Service {
  public:
@@ -44,6 +58,8 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
   grpc::Status ListJobs(grpc::ServerContext*, const v1::ListJobsRequest*,
                         v1::ListJobsResponse*) override;
   grpc::Status CancelJob(grpc::ServerContext*, const v1::CancelJobRequest*, v1::Job*) override;
+  grpc::Status DeleteJob(grpc::ServerContext*, const v1::DeleteJobRequest*,
+                         v1::DeleteJobResponse*) override;
   grpc::Status DownloadResult(grpc::ServerContext*, const v1::DownloadResultRequest*,
                               grpc::ServerWriter<v1::ResultChunk>*) override;
   grpc::Status GetTractionCurve(grpc::ServerContext*, const v1::GetTractionCurveRequest*,
@@ -82,6 +98,7 @@ class MobilityServiceImpl final : public v1::MobilityService::Service {
   const TierRegistry& tiers_;
   CurveResolver& resolver_;
   ServiceLimits limits_;
+  StallWatch stall_watch_;
   std::string models_dir_;
   std::atomic<bool> draining_{false};
 };

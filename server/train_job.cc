@@ -297,7 +297,7 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
   rec.name = request.name().empty() ? "surrogate training: " + soil.soil : request.name();
   rec.tier = "fe-ann";
   rec.request = request.SerializeAsString();
-  return Enqueue(std::move(rec), nullptr);
+  return Enqueue(std::move(rec));
 }
 
 void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<Live>& live) {
@@ -314,8 +314,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
   // A stopped job: cancelled, or back to QUEUED for the next start when the server drains.
   const auto end_stopped = [&] {
     if (live->cancel_requested) return Finish(id, cache::JobState::kCancelled, "cancelled", "", {});
-    jobs_.SetState(id, cache::JobState::kQueued, "interrupted by a shutdown; resumes at next start");
-    spdlog::info("job {} interrupted by the shutdown; queued for the next start", id);
+    Requeue(id);
   };
   const auto end_failed = [&](const TaskResult& failure, const std::string& what) {
     Finish(id, cache::JobState::kFailed,

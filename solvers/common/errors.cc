@@ -1,8 +1,18 @@
 #include "solvers/common/errors.h"
 
+#include <cmath>
+#include <cstdio>
 #include <exception>
 
 namespace gonogo {
+
+void RequirePlausible(double value, const PlausibleRange& range, const std::string& field) {
+  if (std::isfinite(value) && value >= range.min && value <= range.max) return;
+  char text[160];
+  std::snprintf(text, sizeof text, "%g %s is outside the plausible range [%g, %g] %s", value,
+                range.unit, range.min, range.max, range.unit);
+  throw InputError(field, text);
+}
 
 const char* ErrorKindName(ErrorKind kind) {
   switch (kind) {

@@ -99,4 +99,16 @@ inline void Require(bool ok, const std::string& field, const std::string& reason
   if (!ok) throw InputError(field, reason);
 }
 
+// The widest values an input can plausibly take, declared beside the parameter it bounds. A value
+// outside is a unit mistake (or an attack) and is refused when the request arrives, so that nothing
+// accepted fails later for a reason known at submission.
+struct PlausibleRange {
+  double min;
+  double max;
+  const char* unit;
+};
+
+// InputError naming `field`, the value and the range when `value` is not finite or lies outside.
+void RequirePlausible(double value, const PlausibleRange& range, const std::string& field);
+
 }  // namespace gonogo

@@ -15,6 +15,8 @@ bool PositiveFinite(double v) { return std::isfinite(v) && v > 0; }
 void TyreGeometry::Validate(const std::string& p) const {
   Require(PositiveFinite(diameter_m), p + "diameter_m", "must be a positive number of metres");
   Require(PositiveFinite(width_m), p + "width_m", "must be a positive number of metres");
+  RequirePlausible(diameter_m, kPlausibleTyreDiameter, p + "diameter_m");
+  RequirePlausible(width_m, kPlausibleTyreWidth, p + "width_m");
   Require(PositiveFinite(section_height_m), p + "section_height_m",
           "must be a positive number of metres");
   Require(section_height_m < 0.5 * diameter_m, p + "section_height_m",
@@ -66,6 +68,7 @@ BekkerParameters BekkerParameters::FromSoilModel(const SoilParameters& p) {
 void SoilState::Validate(const std::string& p) const {
   Require(std::isfinite(cone_index_pa), p + "cone_index_pa", "must be a finite number (got NaN or inf)");
   Require(cone_index_pa >= 0, p + "cone_index_pa", "must not be negative");
+  RequirePlausible(cone_index_pa, kPlausibleConeIndex, p + "cone_index_pa");
   if (parameters) SoilModels().Validate(*parameters, p + "parameters");
 }
 
@@ -73,6 +76,7 @@ void TractionRequest::Validate() const {
   soil.Validate("soil.");
   tyre.Validate("tyre.");
   Require(PositiveFinite(wheel_load_n), "wheel_load_n", "must be a positive number of newtons");
+  RequirePlausible(wheel_load_n, kPlausibleWheelLoad, "wheel_load_n");
   Require(!slips.empty(), "slips", "must hold at least one slip value");
   for (double s : slips) Require(std::isfinite(s) && s >= 0 && s <= 1, "slips", "each slip must lie in [0, 1]");
   Require(surrogate_model.size() <= 64, "surrogate_model", "must be at most 64 characters");
@@ -84,6 +88,10 @@ void TractionRequest::Validate() const {
 
 std::vector<double> TractionRequest::SlipSweep(double step) {
   Require(std::isfinite(step) && step > 0 && step <= 1, "slip_step", "must lie in (0, 1]");
+  if (step < kMinSlipStep) {
+    throw LimitError("slip_step", "a step below 0.001 (more than 1,001 slip points a curve) is "
+                                  "beyond what the service computes or stores");
+  }
   std::vector<double> slips;
   const int n = static_cast<int>(std::floor(1.0 / step + 1e-9));
   for (int i = 0; i <= n; ++i) slips.push_back(std::min(1.0, i * step));

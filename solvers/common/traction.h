@@ -6,9 +6,19 @@
 #include <string>
 #include <vector>
 
+#include "solvers/common/errors.h"
 #include "solvers/common/soil_model.h"
 
 namespace gonogo {
+
+// Plausible ranges (RequirePlausible): from a garden cart's wheel to a mining haul truck's 4 m tyre
+// carrying about 100 t, and cone indices from water to ground a penetrometer cannot enter.
+inline constexpr PlausibleRange kPlausibleTyreDiameter{0.1, 5.0, "m"};
+inline constexpr PlausibleRange kPlausibleTyreWidth{0.02, 2.0, "m"};
+inline constexpr PlausibleRange kPlausibleWheelLoad{10.0, 1.5e6, "N"};
+inline constexpr PlausibleRange kPlausibleConeIndex{0.0, 2e7, "Pa"};
+// The finest slip sweep a curve may ask for: 1,001 points (a step below it is a LimitError).
+inline constexpr double kMinSlipStep = 0.001;
 
 // Pneumatic tyre (or rigid wheel when deflection_m = 0). Symbols of seed 001 Table 1 in brackets.
 struct TyreGeometry {

@@ -8,7 +8,10 @@ namespace gonogo::mobility {
 
 void VehicleSpec::Validate() const {
   Require(std::isfinite(mass_kg) && mass_kg > 0, "vehicle.mass_kg", "must be a positive mass in kg");
+  RequirePlausible(mass_kg, kPlausibleVehicleMass, "vehicle.mass_kg");
   Require(!axles.empty(), "vehicle.axles", "at least one axle is required");
+  Require(axles.size() <= static_cast<size_t>(kMaxAxles), "vehicle.axles",
+          "at most " + std::to_string(kMaxAxles) + " axles (got " + std::to_string(axles.size()) + ")");
   double sum = 0;
   bool any_driven = false;
   for (size_t i = 0; i < axles.size(); ++i) {
@@ -17,6 +20,8 @@ void VehicleSpec::Validate() const {
     Require(std::isfinite(a.load_fraction) && a.load_fraction > 0 && a.load_fraction <= 1,
             p + "load_fraction", "must lie in (0, 1]");
     Require(a.wheels >= 1, p + "wheels", "must be at least 1");
+    Require(a.wheels <= kMaxWheelsPerAxle, p + "wheels",
+            "must be at most " + std::to_string(kMaxWheelsPerAxle));
     a.tyre.Validate(p + "tyre.");
     sum += a.load_fraction;
     any_driven = any_driven || a.driven;
@@ -26,13 +31,16 @@ void VehicleSpec::Validate() const {
   Require(any_driven, "vehicle.axles", "at least one axle must be driven");
   Require(std::isfinite(drive_power_w) && drive_power_w > 0, "vehicle.drive_power_w",
           "must be a positive power in W");
+  RequirePlausible(drive_power_w, kPlausibleDrivePower, "vehicle.drive_power_w");
   Require(std::isfinite(max_speed_kmh) && max_speed_kmh > 0, "vehicle.max_speed_kmh",
           "must be a positive speed in km/h");
+  RequirePlausible(max_speed_kmh, kPlausibleMaxSpeed, "vehicle.max_speed_kmh");
   Require(std::isfinite(driveline_efficiency) && driveline_efficiency > 0 &&
               driveline_efficiency <= 1,
           "vehicle.driveline_efficiency", "must lie in (0, 1]");
   Require(std::isfinite(ground_clearance_m) && ground_clearance_m >= 0,
           "vehicle.ground_clearance_m", "must not be negative");
+  RequirePlausible(ground_clearance_m, kPlausibleGroundClearance, "vehicle.ground_clearance_m");
 }
 
 double VehicleSpec::WheelLoadN(int axle) const {

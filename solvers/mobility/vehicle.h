@@ -11,6 +11,14 @@ namespace gonogo::mobility {
 
 inline constexpr double kDefaultDrivelineEfficiency = 0.85;
 
+// Plausible ranges (RequirePlausible): from a quad bike to the heaviest off-road haul trucks.
+inline constexpr PlausibleRange kPlausibleVehicleMass{10.0, 1e6, "kg"};
+inline constexpr PlausibleRange kPlausibleDrivePower{10.0, 2e7, "W"};
+inline constexpr PlausibleRange kPlausibleMaxSpeed{0.1, 300.0, "km/h"};
+inline constexpr PlausibleRange kPlausibleGroundClearance{0.0, 5.0, "m"};
+inline constexpr int kMaxAxles = 20;
+inline constexpr int kMaxWheelsPerAxle = 16;
+
 struct AxleSpec {
   double load_fraction = 0;  // share of the vehicle's weight on this axle, 0..1
   int wheels = 0;            // tyres on the axle

@@ -15,21 +15,6 @@
 namespace gonogo::testing {
 namespace {
 
-constexpr char kAliceToken[] = "alice-0123456789abcdef";
-constexpr char kBobToken[] = "bob-0123456789abcdefgh";
-constexpr char kOpsToken[] = "ops-0123456789abcdefgh";
-
-// A token file for alice, bob and the admin ops, mode 0600.
-fs::path WriteTokenFile(const fs::path& dir) {
-  const fs::path path = dir / "tokens";
-  std::ofstream(path) << "# token identity [admin]\n"
-                      << kAliceToken << " alice\n"
-                      << kBobToken << " bob\n"
-                      << kOpsToken << " ops admin\n";
-  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);
-  return path;
-}
-
 // Calls `method` of the MobilityService with an empty request, as a unary call whatever its kind:
 // a refusal before the handler reads anything looks the same for every kind.
 grpc::Status CallWithEmptyRequest(const std::shared_ptr<grpc::Channel>& channel,

@@ -54,6 +54,16 @@ CliRun RunShell(const std::string& command) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+fs::path WriteTokenFile(const fs::path& dir) {
+  const fs::path path = dir / "tokens";
+  std::ofstream(path) << "# token identity [admin]\n"
+                      << kAliceToken << " alice\n"
+                      << kBobToken << " bob\n"
+                      << kOpsToken << " ops admin\n";
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);
+  return path;
+}
+
 CliRun Gonogo(const std::string& endpoint, const std::string& args) {
   return RunShell(BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args);
 }

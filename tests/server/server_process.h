@@ -40,6 +40,13 @@ bool MakeSampleTerrain(const fs::path& out, int size);
 // carrying 1,000 N (the fe-de and fe-ann tests' rig wheel), for maps on those tiers.
 void WriteDeSoilTableAndRigWheels(const fs::path& terrain_dir);
 
+// Bearer tokens of a token file (WriteTokenFile): alice and bob, and the admin ops.
+inline constexpr char kAliceToken[] = "alice-0123456789abcdef";
+inline constexpr char kBobToken[] = "bob-0123456789abcdefgh";
+inline constexpr char kOpsToken[] = "ops-0123456789abcdefgh";
+// `dir`/tokens for alice, bob and ops (admin), mode 0600, for gonogo-server --token-file.
+fs::path WriteTokenFile(const fs::path& dir);
+
 // gonogo-server (optionally under mpirun) listening on 127.0.0.1:0.
 class ServerProcess {
  public:
@@ -50,6 +57,8 @@ class ServerProcess {
 
   const std::string& endpoint() const { return endpoint_; }
   const std::string& banner() const { return banner_; }
+  // The serving process (rank 0 under mpirun).
+  pid_t server_pid() const { return server_pid_; }
   // Plaintext; with a `token`, every call carries it as "authorization: Bearer TOKEN".
   std::unique_ptr<v1::MobilityService::Stub> Stub(const std::string& token = "") const;
   std::shared_ptr<grpc::Channel> Channel(const std::string& token = "") const;
