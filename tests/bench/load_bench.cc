@@ -1,13 +1,13 @@
 // A bounded loopback load test of the service.
 //
-//   build/tests/bench/gonogo-bench-load [--clients 8] [--seconds 30] [--size 48]
+//   build/tests/bench/gonogo-bench-load [--clients 8] [--seconds 30] [--rounds 3] [--size 48]
 //
 // Starts gonogo-server (embedded default, 2 worker threads, a token file with one identity per
 // client) on a fresh data directory, then CLIENTS threads, each with its own identity, run a mix for
 // SECONDS: cached traction-curve queries (timed), small empirical maps (upload, watch to DONE,
 // download), maps cancelled part-way, and list calls. Prints the calls of each kind, every error (the
 // target is none), the p50 and p99 latency of a cached curve query, and the server's resident memory
-// before the load, after it, and after a second identical round (growth between rounds is a leak).
+// before the load and after each identical round (growth that does not level off is a leak).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -131,12 +131,13 @@ double Percentile(std::vector<double> values, double p) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int clients = 8, seconds = 30, size = 48;
+  int clients = 8, seconds = 30, rounds = 3, size = 48;
   CLI::App app("A bounded loopback load test: several clients, mixed maps, cached curves, cancels and "
                "lists for a fixed time; prints errors, cached-curve latency and server memory.",
                "gonogo-bench-load");
   app.add_option("--clients", clients, "client threads, one identity each")->check(CLI::Range(1, 64))->capture_default_str();
-  app.add_option("--seconds", seconds, "length of each of the two rounds")->check(CLI::Range(1, 3600))->capture_default_str();
+  app.add_option("--seconds", seconds, "length of each round, s")->check(CLI::Range(1, 3600))->capture_default_str();
+  app.add_option("--rounds", rounds, "identical rounds, memory printed after each")->check(CLI::Range(1, 100))->capture_default_str();
   app.add_option("--size", size, "cells per side of the sample terrain the maps use")->check(CLI::Range(8, 2000))->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -176,10 +177,10 @@ int main(int argc, char** argv) {
     }
   }
   const double rss_start = ResidentMiB(server.server_pid());
-  std::printf("gonogo-bench-load: %d clients, 2 rounds of %d s, %d x %d terrain; server RSS at start %.1f MiB\n",
-              clients, seconds, size, size, rss_start);
+  std::printf("gonogo-bench-load: %d clients, %d rounds of %d s, %d x %d terrain; server RSS at start %.1f MiB\n",
+              clients, rounds, seconds, size, size, rss_start);
   int total_errors = 0;
-  for (int round = 1; round <= 2; ++round) {
+  for (int round = 1; round <= rounds; ++round) {
     Tally tally;
     const Clock::time_point until = Clock::now() + std::chrono::seconds(seconds);
     std::vector<std::thread> threads;
