@@ -22,6 +22,8 @@ packages=(
   # tests; the products opened in QGIS (offscreen) and the STAC item checked against its schema;
   # certificates for the TLS tests
   libgtest-dev libgmock-dev python3-qgis python3-jsonschema openssl
+  # fuzzing the parsers of untrusted bytes: clang with libFuzzer and the sanitizers (deploy/fuzz.sh)
+  clang libclang-rt-dev
 )
 
 missing=()

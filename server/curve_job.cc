@@ -65,6 +65,7 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
       std::lock_guard<std::mutex> lock(mutex_);
       return stopping_ || live->cancel_requested.load();
     };
+    options.discard = [&] { return live->cancel_requested.load(); };
     options.after_lookups = [&](const std::vector<Resolution>& found) {
       if (!found.front().ok()) report(0.0, "computing the traction curve on the pool", true);
     };

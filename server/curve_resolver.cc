@@ -127,7 +127,13 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
                               [&] { return !inbox->results.empty(); });
       batch.swap(inbox->results);
     }
+    const bool discard = options.discard && options.discard();
     for (TaskResult& result : batch) {
+      if (discard && result.ok) {
+        result.ok = false;
+        result.cancelled = true;
+        result.error = "cancelled";
+      }
       auto it = outstanding.find(result.task_id);
       if (it == outstanding.end()) continue;
       const size_t i = it->second;

@@ -54,6 +54,10 @@ struct ResolveOptions {
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   // Polled about every 100 ms while tasks are out: true cancels what is outstanding.
   std::function<bool()> stop;
+  // True once the caller no longer wants the work (a cancelled job): a curve that still arrives is
+  // dropped, not committed, and reported as cancelled. A drain stops without discarding, so that a
+  // curve finished meanwhile is kept for the resumed job.
+  std::function<bool()> discard;
   // A failed task cancels the rest (a map cannot be drawn with a hole in it).
   bool stop_on_failure = false;
   // Only the cache: misses stay kUnresolved and nothing is sent to the pool.

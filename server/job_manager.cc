@@ -40,27 +40,6 @@ std::optional<geo::RasterInput> OptionalRaster(const std::string& path) {
 
 
 
-std::map<int32_t, SoilClassInfo> SoilTableOf(const v1::SoilTable& table) {
-  std::map<int32_t, SoilClassInfo> out;
-  for (int i = 0; i < table.classes_size(); ++i) {
-    const v1::SoilClass& c = table.classes(i);
-    const std::string field = "soil_table.classes[" + std::to_string(i) + "]";
-    Require(!out.count(c.code()), field + ".code", "code " + std::to_string(c.code()) + " repeats");
-    const double ri = c.remolding_index() == 0 ? 1.0 : c.remolding_index();
-    Require(std::isfinite(ri) && ri > 0 && ri <= 2, field + ".remolding_index",
-            "must lie in (0, 2]");
-    const std::string library_name = c.bekker_soil().empty() ? c.name() : c.bekker_soil();
-    out[c.code()] = SoilClassInfo{
-        library_name, ri,
-        SoilParametersFromProto(c.has_parameters(), c.parameters(), c.has_bekker(), c.bekker())};
-    if (out[c.code()].parameters) {
-      out[c.code()].parameters =
-          SoilModels().Validate(*out[c.code()].parameters, field + ".parameters");
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 JobManager::JobManager(JobManagerConfig config, cache::Database& db, const TierRegistry& tiers,
@@ -508,6 +487,7 @@ void JobManager::RunJob(const std::string& id) {
       std::lock_guard<std::mutex> lock(mutex_);
       return stopping_ || live->cancel_requested.load();
     };
+    options.discard = [&] { return live->cancel_requested.load(); };
     options.after_lookups = [&](const std::vector<Resolution>& found) {
       for (const Resolution& r : found) {
         if (!r.ok()) continue;

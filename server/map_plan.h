@@ -10,17 +10,12 @@
 #include <vector>
 
 #include "server/geo/terrain.h"
+#include "server/request_convert.h"
 #include "solvers/common/tier.h"
 #include "solvers/mobility/gonogo.h"
 #include "solvers/mobility/vehicle.h"
 
 namespace gonogo::server {
-
-struct SoilClassInfo {
-  std::string name;
-  double remolding_index = 1.0;  // RCI = CI * RI
-  std::optional<SoilParameters> parameters;  // explicit soil-model parameters
-};
 
 struct TerrainUnit {
   int32_t soil_code = -1;        // -1 when there is no soil raster

@@ -28,30 +28,7 @@ namespace {
 
 constexpr size_t kChunkBytes = 1 << 20;
 
-// LimitError (RESOURCE_EXHAUSTED) naming `field` when `text` is longer than `max_bytes`.
-void RequireShort(const std::string& text, size_t max_bytes, const std::string& field) {
-  if (text.size() > max_bytes) {
-    throw LimitError(field, "is " + std::to_string(text.size()) + " bytes long; the limit is " +
-                                std::to_string(max_bytes));
-  }
-}
 
-// The names a map request stores and echoes.
-void RequireShortNames(const v1::MapRequest& request) {
-  RequireShort(request.name(), kMaxNameBytes, "name");
-  RequireShort(request.vehicle().name(), kMaxNameBytes, "vehicle.name");
-  RequireShort(request.vehicle().description(), kMaxTextBytes, "vehicle.description");
-  RequireShort(request.surrogate_model(), kMaxIdBytes, "surrogate_model");
-  if (request.soil_table().classes_size() > 256) {
-    throw LimitError("soil_table.classes", "at most 256 soil classes (got " +
-                                               std::to_string(request.soil_table().classes_size()) + ")");
-  }
-  for (const auto& c : request.soil_table().classes()) {
-    const std::string field = "soil_table.classes[code " + std::to_string(c.code()) + "]";
-    RequireShort(c.name(), kMaxNameBytes, field + ".name");
-    RequireShort(c.bekker_soil(), kMaxNameBytes, field + ".bekker_soil");
-  }
-}
 
 const char* RoleFileName(v1::RasterRole role) {
   switch (role) {

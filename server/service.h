@@ -12,6 +12,7 @@
 #include "server/curve_resolver.h"
 #include "server/identity.h"
 #include "server/job_manager.h"
+#include "server/request_convert.h"
 #include "server/stall_watch.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
@@ -33,11 +34,6 @@ struct ServiceLimits {
   // (--stream-stall-s).
   int stream_stall_ms = 60'000;
 };
-
-// Strings a request may carry, bounded before anything is stored or echoed back.
-inline constexpr size_t kMaxNameBytes = 256;  // job, vehicle, soil and model names
-inline constexpr size_t kMaxIdBytes = 64;     // job ids, product names, page tokens
-inline constexpr size_t kMaxTextBytes = 4096; // free text: a vehicle's description
 
 class MobilityServiceImpl final : public v1::MobilityService::Service {
  public:

@@ -19,6 +19,8 @@ namespace {
 // server files or URLs, and header-plus-data formats (ENVI, EHdr) need sidecars an upload lacks.
 const char* const kAllowedDrivers[] = {"GTiff", "GPKG", "HFA", "JP2OpenJPEG", "netCDF", nullptr};
 
+constexpr int kMaxUploadBands = 64;
+
 constexpr float kNoDataF = std::numeric_limits<float>::quiet_NaN();
 
 // Rows per strip for HasAnyValidCell: at most a few MB per read.
@@ -74,6 +76,13 @@ OpenedRaster OpenUpload(const RasterInput& input, const std::string& field, int6
           "raster has no bands" + std::string(ds.GetMetadata("SUBDATASETS") != nullptr
                                                   ? " (it holds several sub-datasets; upload one)"
                                                   : ""));
+  // gonogo reads band 1. A few-kB TIFF can declare 65,535 bands, for each of which GDAL keeps an
+  // object (about 100 MB in all, found by tests/fuzz): refused before anything reads them.
+  if (ds.GetRasterCount() > kMaxUploadBands) {
+    throw LimitError(field, "raster has " + std::to_string(ds.GetRasterCount()) +
+                                " bands; gonogo reads band 1 of a raster of at most " +
+                                std::to_string(kMaxUploadBands));
+  }
   const int64_t cells = static_cast<int64_t>(raster.width) * raster.height;
   if (cells > max_cells) {
     throw LimitError(field, std::to_string(raster.width) + " x " + std::to_string(raster.height) +

@@ -351,6 +351,47 @@ TEST_F(LimitsTest, HeldOpenStreamsCannotTakeMoreThanTheServersCallThreads) {
   EXPECT_TRUE(served);
 }
 
+// Traction curves in the server's cache.
+int CurveCount(v1::MobilityService::Stub& stub) {
+  grpc::ClientContext context;
+  v1::ListTractionCurvesRequest request;
+  request.set_page_size(1000);
+  v1::ListTractionCurvesResponse response;
+  EXPECT_TRUE(stub.ListTractionCurves(&context, request, &response).ok());
+  return response.curves_size();
+}
+
+TEST_F(LimitsTest, ACancelTakesEffectWithinASecondAndCommitsNoCurveAfterIt) {
+  ScratchDir scratch("limits-cancel");
+  // Every task takes 600 ms, so that two are in flight, part-way, when the cancel arrives.
+  ServerProcess server(scratch.path() / "data", {"--task-delay-ms", "600", "--threads", "2"});
+  auto stub = server.Stub();
+  v1::MapRequest request = SampleRequest();
+  request.set_disable_similarity(true);
+  v1::Job job;
+  ASSERT_TRUE(Submit(*stub, request, SampleRasters(), &job).ok());
+  ASSERT_TRUE(WaitRunning(*stub, job.job_id()));
+  for (int i = 0; i < 100 && StatusOf(*stub, job.job_id()).tasks_done() < 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the next two are part-way
+  grpc::ClientContext context;
+  v1::CancelJobRequest cancel;
+  cancel.set_job_id(job.job_id());
+  v1::Job after;
+  const Clock::time_point cancelled = Clock::now();
+  ASSERT_TRUE(stub->CancelJob(&context, cancel, &after).ok());
+  const int curves_at_cancel = CurveCount(*stub);
+  const v1::JobStatus end = WaitForEnd(*stub, job.job_id());
+  EXPECT_EQ(end.state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_LT(Clock::now() - cancelled, std::chrono::milliseconds(1500)) << "the cancel takes effect within a second";
+  EXPECT_LT(end.tasks_done(), end.tasks_total());
+  // The tasks that were part-way would have finished by now: their curves are dropped.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  EXPECT_EQ(CurveCount(*stub), curves_at_cancel) << "no curve committed after the cancel";
+  EXPECT_GE(curves_at_cancel, 2) << "the curves finished before the cancel stay";
+}
+
 TEST_F(LimitsTest, AStalledUploadIsCancelledAndLeavesNothing) {
   ScratchDir scratch("limits-stall");
   const fs::path data = scratch.path() / "data";
