@@ -90,4 +90,8 @@ std::string SimilarityGroup(const std::string& tier, const std::string& tier_ver
   return group;
 }
 
+std::string Scoped(const std::string& scope, const std::string& key_or_group) {
+  return scope.empty() ? key_or_group : "scope=" + scope + "|" + key_or_group;
+}
+
 }  // namespace gonogo::cache

@@ -42,5 +42,8 @@ std::string SurrogateModelOfKey(const std::string& key);
 // match (solvers/mobility/similarity.h).
 std::string SimilarityGroup(const std::string& tier, const std::string& tier_version,
                             const TractionRequest& quantised);
+// A cache key or similarity group within a scope: itself for the shared scope (""), else prefixed
+// by the scope, so that curves of one scope (an identity, when sharing is off) never answer another.
+std::string Scoped(const std::string& scope, const std::string& key_or_group);
 
 }  // namespace gonogo::cache

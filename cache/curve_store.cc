@@ -99,7 +99,7 @@ bool CurveStore::Put(const StoredCurve& c) {
   s.Bind(16, CanonicalText(c.request.soil.parameters));
   s.Bind(17, c.request.tyre.inflation_pressure_pa);
   const mobility::PiTerms pi = mobility::ComputePiTerms(c.request);
-  s.Bind(18, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request));
+  s.Bind(18, Scoped(c.scope, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request)));
   s.Bind(19, pi.width_over_diameter).Bind(20, pi.deflection_over_height);
   s.Bind(21, pi.load_over_bd_pa).Bind(22, c.curve.immobile_reason);
   s.Run();
@@ -138,9 +138,10 @@ CurvePage CurveStore::List(const CurveFilter& f, int page_size, int64_t before_i
       std::string("SELECT ") + kColumns +
       " FROM curves WHERE (?1 = '' OR tier = ?1) AND (?2 = '' OR soil_name = ?2)"
       " AND (?3 <= 0 OR cone_index_pa >= ?3) AND (?4 <= 0 OR cone_index_pa <= ?4)"
-      " AND (?5 <= 0 OR id < ?5) ORDER BY id DESC LIMIT ?6");
+      " AND (?5 <= 0 OR id < ?5) AND (?7 = '' OR substr(cache_key, 1, length(?7)) = ?7)"
+      " ORDER BY id DESC LIMIT ?6");
   s.Bind(1, f.tier).Bind(2, f.soil_name).Bind(3, f.min_cone_index_pa).Bind(4, f.max_cone_index_pa);
-  s.Bind(5, before_id).Bind(6, static_cast<int64_t>(page_size + 1));
+  s.Bind(5, before_id).Bind(6, static_cast<int64_t>(page_size + 1)).Bind(7, f.key_prefix);
   CurvePage page;
   int64_t last_id = 0;
   while (s.Step()) {

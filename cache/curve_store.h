@@ -19,6 +19,7 @@ struct StoredCurve {
   std::string computed_by;       // "rank N" or "thread"
   double compute_seconds = 0;    // solver wall time, s
   int64_t computed_unix_ms = 0;
+  std::string scope;             // "" shared; else cache_key is Scoped(scope, ...) (curve_key.h)
 };
 
 struct CurveFilter {
@@ -26,6 +27,7 @@ struct CurveFilter {
   std::string soil_name;         // empty: any
   double min_cone_index_pa = 0;  // 0: unbounded
   double max_cone_index_pa = 0;  // 0: unbounded
+  std::string key_prefix;        // empty: any; else only keys that start with it (a scope's)
 };
 
 struct CurvePage {

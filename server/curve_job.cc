@@ -66,6 +66,7 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
       return stopping_ || live->cancel_requested.load();
     };
     options.discard = [&] { return live->cancel_requested.load(); };
+    options.scope = CurveScope(rec.owner);
     options.after_lookups = [&](const std::vector<Resolution>& found) {
       if (!found.front().ok()) report(0.0, "computing the traction curve on the pool", true);
     };

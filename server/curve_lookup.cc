@@ -9,7 +9,7 @@ namespace gonogo::server {
 
 std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const TractionTier& tier,
                                         const TractionRequest& q, const std::string& key,
-                                        bool allow_similarity) {
+                                        bool allow_similarity, const std::string& scope) {
   if (auto exact = store.Find(key)) {
     CachedAnswer a;
     a.curve = exact->curve;
@@ -17,7 +17,7 @@ std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const Traction
     return a;
   }
   if (!allow_similarity) return std::nullopt;
-  auto similar = store.FindSimilar(cache::SimilarityGroup(tier.Name(), tier.Version(), q), q,
+  auto similar = store.FindSimilar(cache::Scoped(scope, cache::SimilarityGroup(tier.Name(), tier.Version(), q)), q,
                                    mobility::kPiTermTolerance, mobility::kMinimumScaleRatio);
   if (!similar) return std::nullopt;
   CachedAnswer a;

@@ -22,7 +22,7 @@ struct CachedAnswer {
 
 std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const TractionTier& tier,
                                         const TractionRequest& quantised, const std::string& key,
-                                        bool allow_similarity);
+                                        bool allow_similarity, const std::string& scope = "");
 
 // The API form of an answer. `request` and `curve` are what is answered; `source` the stored curve
 // behind it (the same one, except for a similarity hit).

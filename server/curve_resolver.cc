@@ -63,10 +63,12 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
                                                const std::vector<CurveTask>& tasks,
                                                const ResolveOptions& options) {
   std::vector<Resolution> out(tasks.size());
+  std::vector<std::string> keys;  // the tasks' keys within the caller's scope
+  for (const CurveTask& task : tasks) keys.push_back(cache::Scoped(options.scope, task.key));
   // 1. The cache: exact key, then a similar tyre.
   for (size_t i = 0; i < tasks.size(); ++i) {
-    auto found =
-        LookUpCurve(store_, tier, tasks[i].request, tasks[i].key, options.allow_similarity);
+    auto found = LookUpCurve(store_, tier, tasks[i].request, keys[i], options.allow_similarity,
+                             options.scope);
     if (!found) continue;
     Resolution& r = out[i];
     r.source = found->similarity ? CurveSource::kCacheSimilar : CurveSource::kCacheExact;
@@ -99,7 +101,7 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       spec.debug_delay_ms = options.debug_delay_ms;
       spec.needs = tier.Needs(tasks[i].request);
       if (!checkpoint_root_.empty() && spec.needs.expected_seconds >= kCheckpointedTaskSeconds) {
-        spec.checkpoint_dir = CheckpointDirectory(checkpoint_root_, tasks[i].key);
+        spec.checkpoint_dir = CheckpointDirectory(checkpoint_root_, keys[i]);
         std::error_code error;
         std::filesystem::create_directories(spec.checkpoint_dir, error);
         if (error) spec.checkpoint_dir.clear();  // computed without checkpoints then
@@ -141,14 +143,14 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       Resolution& r = out[i];
       if (!result.cancelled && !checkpoint_root_.empty()) {
         std::error_code ignored;  // stored or failed: the restart files are of no more use
-        std::filesystem::remove_all(CheckpointDirectory(checkpoint_root_, tasks[i].key), ignored);
+        std::filesystem::remove_all(CheckpointDirectory(checkpoint_root_, keys[i]), ignored);
       }
       if (result.ok) {
         result.curve.tier = tier.Name();
         r.source = CurveSource::kComputed;
-        r.stored = cache::StoredCurve{tasks[i].key,        tasks[i].request,
+        r.stored = cache::StoredCurve{keys[i],        tasks[i].request,
                                       result.curve,        result.computed_by,
-                                      result.compute_seconds, NowMs()};
+                                      result.compute_seconds, NowMs(), options.scope};
         store_.Put(r.stored);  // committed now: a crash loses no finished curve
         r.curve = std::move(result.curve);
       } else {

@@ -50,6 +50,9 @@ struct Resolution {
 
 struct ResolveOptions {
   bool allow_similarity = true;
+  // The cache scope of the caller: "" (the default) shares curves with every identity; an
+  // identity's name keeps its curves to itself (gonogo-server --private-curves).
+  std::string scope;
   uint32_t debug_delay_ms = 0;  // fault-injection delay on every computed task
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   // Polled about every 100 ms while tasks are out: true cancels what is outstanding.

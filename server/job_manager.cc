@@ -488,6 +488,7 @@ void JobManager::RunJob(const std::string& id) {
       return stopping_ || live->cancel_requested.load();
     };
     options.discard = [&] { return live->cancel_requested.load(); };
+    options.scope = CurveScope(rec->owner);
     options.after_lookups = [&](const std::vector<Resolution>& found) {
       for (const Resolution& r : found) {
         if (!r.ok()) continue;

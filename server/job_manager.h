@@ -50,6 +50,9 @@ struct JobManagerConfig {
   double keep_jobs_days = 30;
   int64_t keep_jobs_bytes = 50LL << 30;
   int retention_sweep_ms = 3'600'000;  // between sweeps; one also runs at Start()
+  // Traction curves are physics, shared by every identity; false keeps each identity's to itself
+  // (--private-curves).
+  bool share_curves = true;
 };
 
 // Paths of a job's stored input rasters (empty when not sent).
@@ -105,6 +108,8 @@ class JobManager {
   int64_t Delete(const std::string& job_id);
   // Applies the retention limits (JobManagerConfig::keep_jobs_*); returns how many jobs it deleted.
   int SweepRetention();
+  // The curve-cache scope of `owner` (ResolveOptions::scope): "" while curves are shared.
+  std::string CurveScope(const std::string& owner) const { return config_.share_curves ? "" : owner; }
   // True once Drain() has begun.
   bool stopping();
   // Waits until the job's status changes from `seen_version` or `timeout_ms` passes; returns the

@@ -57,6 +57,7 @@ struct Options {
   int64_t max_upload_chunks = 8192;
   double curve_timeout_s = 1800;
   double stream_stall_s = 60;
+  bool private_curves = false;
   double keep_jobs_days = 30;
   double keep_jobs_gib = 50;
   int64_t max_tasks_per_job = 50'000;
@@ -107,6 +108,9 @@ Options Parse(int argc, char** argv) {
                  "most calls served at once (open streams included); beyond it a call gets "
                  "RESOURCE_EXHAUSTED")
       ->check(CLI::Range(4, 1 << 16));
+  app.add_flag("--private-curves", o.private_curves,
+               "keep each identity's traction curves to itself (by default curves are physics, "
+               "shared by every identity through the cache)");
   app.add_option("--keep-jobs-days", o.keep_jobs_days,
                  "ended jobs older than this are deleted (their curves stay cached); 0: kept")
       ->check(CLI::Range(0.0, 1e6));
@@ -271,6 +275,7 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   config.max_concurrent_jobs = o.max_jobs;
   config.max_tasks_per_job = o.max_tasks_per_job;
   config.keep_jobs_days = o.keep_jobs_days;
+  config.share_curves = !o.private_curves;
   config.keep_jobs_bytes = static_cast<int64_t>(o.keep_jobs_gib * (1LL << 30));
   config.max_queued_jobs = o.max_queued_jobs;
   config.max_queued_jobs_per_identity = o.max_queued_per_identity;

@@ -106,7 +106,8 @@ std::string PlotPng(const v1::ScalabilityRequest& request,
 v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
                                           const TierRegistry& tiers, CurveResolver& resolver,
                                           std::chrono::steady_clock::time_point deadline,
-                                          const std::function<bool()>& abandon) {
+                                          const std::function<bool()>& abandon,
+                                          const std::string& curve_scope) {
   Require(!request.tier().empty(), "tier", "is missing");
   const TractionTier& tier = tiers.Get(request.tier());
   Require(request.has_tyre(), "tyre", "is missing");
@@ -139,6 +140,7 @@ v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
   options.deadline = deadline;
   options.stop = abandon;
   options.stop_on_failure = true;
+  options.scope = curve_scope;
   const std::vector<Resolution> resolved = resolver.Resolve(tier, tasks, options);
   std::vector<cache::StoredCurve> found;  // the stored curve of each scale
   for (int i = 0; i < n; ++i) {

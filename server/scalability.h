@@ -22,6 +22,7 @@ namespace gonogo::server {
 v1::ScalabilityReport RunScalabilityStudy(const v1::ScalabilityRequest& request,
                                           const TierRegistry& tiers, CurveResolver& resolver,
                                           std::chrono::steady_clock::time_point deadline,
-                                          const std::function<bool()>& abandon);
+                                          const std::function<bool()>& abandon,
+                                          const std::string& curve_scope = "");
 
 }  // namespace gonogo::server

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <random>
 
+#include "cache/curve_key.h"
 #include "cache/dataset_store.h"
 #include "server/convert.h"
 #include "server/curve_lookup.h"
@@ -342,6 +343,7 @@ grpc::Status MobilityServiceImpl::GetTractionCurve(grpc::ServerContext* context,
     options.deadline = std::chrono::steady_clock::now() +
                        std::chrono::milliseconds(limits_.curve_timeout_ms);
     options.stop = [context] { return context->IsCancelled(); };
+    options.scope = jobs_.CurveScope(caller.name);
     const Resolution answer = resolver_.Resolve(tier, {task}, options).front();
     if (answer.source == CurveSource::kCancelled) {
       return {grpc::StatusCode::DEADLINE_EXCEEDED, "the traction curve was not ready in time"};
@@ -397,6 +399,9 @@ grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext* contex
         request->page_size() == 0 ? 50 : static_cast<int>(std::min(request->page_size(), 1000u));
     cache::CurveFilter filter{request->tier(), request->soil_name(), request->min_cone_index_pa(),
                               request->max_cone_index_pa()};
+    // Curves kept private (--private-curves) are listed to their identity alone, and to an admin.
+    const std::string scope = jobs_.CurveScope(caller.name);
+    if (!scope.empty() && !caller.admin) filter.key_prefix = cache::Scoped(scope, "");
     const cache::CurvePage page = curves_.List(filter, page_size, before);
     int64_t next_before = page.next_after_id;
     for (size_t i = 0; i < page.curves.size(); ++i) {
@@ -431,7 +436,8 @@ grpc::Status MobilityServiceImpl::RunScalability(grpc::ServerContext* context,
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::milliseconds(limits_.curve_timeout_ms);
     *response = RunScalabilityStudy(*request, tiers_, resolver_, deadline,
-                                    [context] { return context->IsCancelled(); });
+                                    [context] { return context->IsCancelled(); },
+                                    jobs_.CurveScope(caller.name));
     return grpc::Status::OK;
   } catch (...) {
     return ToStatus(std::current_exception());

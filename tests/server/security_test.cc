@@ -189,6 +189,59 @@ TEST(SecurityTest, JobsArePrivateToTheirOwnerAndVisibleToAnAdminWhileCurvesAreSh
   EXPECT_NE(anonymous.out.find("UNAUTHENTICATED"), std::string::npos) << anonymous.out;
 }
 
+// A curve query for the tyre of EmpiricalCurve scaled by `k` in every length, its load by k^2: the
+// same pi-terms, so that a stored curve of the other size answers it by similarity (seed 001).
+v1::GetTractionCurveRequest ScaledEmpiricalCurve(double wheel_load_n, double k) {
+  v1::GetTractionCurveRequest request = EmpiricalCurve(wheel_load_n * k * k);
+  v1::Tyre* t = request.mutable_tyre();
+  t->set_diameter_m(t->diameter_m() * k);
+  t->set_width_m(t->width_m() * k);
+  t->set_section_height_m(t->section_height_m() * k);
+  t->set_deflection_m(t->deflection_m() * k);
+  return request;
+}
+
+v1::Provenance CurveProvenance(v1::MobilityService::Stub& stub, const v1::GetTractionCurveRequest& request) {
+  grpc::ClientContext context;
+  v1::TractionCurve curve;
+  const grpc::Status s = stub.GetTractionCurve(&context, request, &curve);
+  EXPECT_TRUE(s.ok()) << s.error_message();
+  return curve.provenance();
+}
+
+int ListedCurves(v1::MobilityService::Stub& stub) {
+  grpc::ClientContext context;
+  v1::ListTractionCurvesRequest request;
+  request.set_page_size(1000);
+  v1::ListTractionCurvesResponse response;
+  EXPECT_TRUE(stub.ListTractionCurves(&context, request, &response).ok());
+  return response.curves_size();
+}
+
+TEST(SecurityTest, WithPrivateCurvesNoIdentityIsAnsweredFromAnothersCurves) {
+  ScratchDir scratch("security-private-curves");
+  ServerProcess server(scratch.path() / "data",
+                       {"--token-file", WriteTokenFile(scratch.path()).string(), "--private-curves"});
+  auto alice = server.Stub(kAliceToken);
+  auto bob = server.Stub(kBobToken);
+  auto ops = server.Stub(kOpsToken);
+  EXPECT_FALSE(CurveProvenance(*alice, EmpiricalCurve(7321.0)).cache_hit());
+  // Alice's own cache answers her, exactly and by similarity.
+  EXPECT_TRUE(CurveProvenance(*alice, EmpiricalCurve(7321.0)).cache_hit());
+  const v1::Provenance similar = CurveProvenance(*alice, ScaledEmpiricalCurve(7321.0, 0.8));
+  EXPECT_TRUE(similar.cache_hit() && similar.similarity_hit()) << similar.ShortDebugString();
+  // Bob's queries are computed for him, neither from alice's curve nor scaled from it.
+  EXPECT_FALSE(CurveProvenance(*bob, ScaledEmpiricalCurve(7321.0, 0.8)).cache_hit());
+  v1::GetTractionCurveRequest exact = EmpiricalCurve(7321.0);
+  exact.set_disable_similarity(true);  // not from his own scaled curve either
+  EXPECT_FALSE(CurveProvenance(*bob, exact).cache_hit());
+  EXPECT_TRUE(CurveProvenance(*bob, exact).cache_hit());
+  // Each lists its own; the admin lists both.
+  EXPECT_EQ(ListedCurves(*alice), 1);
+  EXPECT_EQ(ListedCurves(*bob), 2);
+  EXPECT_EQ(ListedCurves(*ops), 3);
+}
+
 // Every directory under `root` is 0700 and every file 0600 or stricter; returns the offenders.
 std::vector<std::string> NotPrivate(const fs::path& root) {
   std::vector<std::string> offenders;
