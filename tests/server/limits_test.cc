@@ -5,11 +5,11 @@
 // disk is the server's failure, files of uploads that never became a job are collected at start,
 // and a drain ends every watcher promptly with its job QUEUED for the next start.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <chrono>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <future>
 #include <sstream>
 #include <thread>
@@ -86,20 +86,6 @@ v1::GetTractionCurveRequest EmpiricalCurve(double slip_step) {
   return request;
 }
 
-// PRAGMA integrity_check of the service's database: "ok" when intact.
-std::string IntegrityCheck(const fs::path& data) {
-  sqlite3* db = nullptr;
-  std::string answer = "cannot open";
-  if (sqlite3_open_v2((data / "gonogo.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* s = nullptr;
-    sqlite3_prepare_v2(db, "PRAGMA integrity_check", -1, &s, nullptr);
-    answer.clear();
-    while (sqlite3_step(s) == SQLITE_ROW) answer += reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
-  return answer;
-}
 
 // The status's code and message, for EXPECT messages.
 std::string Describe(const grpc::Status& s) {
@@ -351,15 +337,6 @@ TEST_F(LimitsTest, HeldOpenStreamsCannotTakeMoreThanTheServersCallThreads) {
   EXPECT_TRUE(served);
 }
 
-// Traction curves in the server's cache.
-int CurveCount(v1::MobilityService::Stub& stub) {
-  grpc::ClientContext context;
-  v1::ListTractionCurvesRequest request;
-  request.set_page_size(1000);
-  v1::ListTractionCurvesResponse response;
-  EXPECT_TRUE(stub.ListTractionCurves(&context, request, &response).ok());
-  return response.curves_size();
-}
 
 TEST_F(LimitsTest, ACancelTakesEffectWithinASecondAndCommitsNoCurveAfterIt) {
   ScratchDir scratch("limits-cancel");
@@ -390,6 +367,75 @@ TEST_F(LimitsTest, ACancelTakesEffectWithinASecondAndCommitsNoCurveAfterIt) {
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
   EXPECT_EQ(CurveCount(*stub), curves_at_cancel) << "no curve committed after the cancel";
   EXPECT_GE(curves_at_cancel, 2) << "the curves finished before the cancel stay";
+}
+
+TEST_F(LimitsTest, AClientThatCancelsAfterItsLastChunkGetsNoJob) {
+  ScratchDir scratch("limits-cancelled-upload");
+  // A terrain large enough that validation (GDAL, warping, planning) takes far longer than the
+  // cancel takes to arrive.
+  const fs::path terrain = scratch.path() / "terrain";
+  ASSERT_TRUE(MakeSampleTerrain(terrain, 600));
+  const fs::path data = scratch.path() / "data";
+  ServerProcess server(data);
+  auto stub = server.Stub();
+  v1::MapRequest request = SampleRequest();
+  *request.mutable_soil_table() = SampleSoilTable(terrain);
+  grpc::ClientContext context;
+  v1::Job job;
+  auto writer = stub->SubmitMap(&context, &job);
+  v1::SubmitMapRequest first;
+  *first.mutable_request() = request;
+  ASSERT_TRUE(writer->Write(first));
+  for (const auto& [role, name] : {std::make_pair(v1::RASTER_ROLE_CONE_INDEX, "cone_index.tif"),
+                                   std::make_pair(v1::RASTER_ROLE_ELEVATION, "elevation.tif"),
+                                   std::make_pair(v1::RASTER_ROLE_SOIL_CLASS, "soil_class.tif")}) {
+    v1::SubmitMapRequest chunk;
+    chunk.mutable_chunk()->set_role(role);
+    chunk.mutable_chunk()->set_data(ReadFile(terrain / name));
+    ASSERT_TRUE(writer->Write(chunk));
+  }
+  ASSERT_TRUE(writer->WritesDone());
+  context.TryCancel();  // the client gives up once everything is sent
+  EXPECT_EQ(writer->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  // The server finishes validating, sees the cancel, and keeps nothing.
+  for (int i = 0; i < 100 && JobDirs(data) > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(JobDirs(data), 0);
+  EXPECT_EQ(ListedJobs(*stub), 0);
+}
+
+TEST_F(LimitsTest, AListPageStopsShortOfTheMessageSizeAClientAccepts) {
+  ScratchDir scratch("limits-page-bytes");
+  ServerProcess server(scratch.path() / "data");
+  auto stub = server.Stub();
+  // 80 curves of 1,001 points each: several MiB in all, more than one answer may carry.
+  constexpr int kCurves = 80;
+  for (int i = 0; i < kCurves; ++i) {
+    v1::GetTractionCurveRequest request = EmpiricalCurve(0.001);
+    request.set_wheel_load_n(5000 + 50 * i);
+    request.set_disable_similarity(true);
+    grpc::ClientContext context;
+    v1::TractionCurve curve;
+    ASSERT_TRUE(stub->GetTractionCurve(&context, request, &curve).ok());
+  }
+  std::set<std::string> keys;
+  int pages = 0;
+  std::string token;
+  do {
+    grpc::ClientContext context;
+    v1::ListTractionCurvesRequest request;
+    request.set_page_size(1000);
+    request.set_page_token(token);
+    v1::ListTractionCurvesResponse response;
+    const grpc::Status s = stub->ListTractionCurves(&context, request, &response);
+    ASSERT_TRUE(s.ok()) << Describe(s);
+    EXPECT_LE(response.ByteSizeLong(), 3u << 20);
+    EXPECT_GT(response.curves_size(), 0);
+    for (const auto& c : response.curves()) keys.insert(c.provenance().cache_key());
+    token = response.next_page_token();
+    ++pages;
+  } while (!token.empty() && pages < 20);
+  EXPECT_GE(pages, 2) << "the curves do not fit in one answer";
+  EXPECT_EQ(keys.size(), static_cast<size_t>(kCurves)) << "every curve once, over the pages";
 }
 
 TEST_F(LimitsTest, AStalledUploadIsCancelledAndLeavesNothing) {

@@ -1,7 +1,6 @@
 // A crash during a job: the server is killed (SIGKILL) part-way, started again on the same data
 // directory, resumes the job to DONE, and recomputes none of the curves finished before the crash.
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <map>
 #include <nlohmann/json.hpp>
@@ -12,20 +11,6 @@
 namespace gonogo::testing {
 namespace {
 
-// cache_key -> computed_unix_ms of every stored curve, read straight from the SQLite file.
-std::map<std::string, int64_t> StoredCurves(const fs::path& db_path) {
-  sqlite3* db = nullptr;
-  std::map<std::string, int64_t> out;
-  if (sqlite3_open_v2(db_path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) return out;
-  sqlite3_stmt* s = nullptr;
-  sqlite3_prepare_v2(db, "SELECT cache_key, computed_unix_ms FROM curves", -1, &s, nullptr);
-  while (sqlite3_step(s) == SQLITE_ROW) {
-    out[reinterpret_cast<const char*>(sqlite3_column_text(s, 0))] = sqlite3_column_int64(s, 1);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return out;
-}
 
 TEST(Restart, KilledJobResumesAndRecomputesNoFinishedCurve) {
   ScratchDir dir("restart");
@@ -63,7 +48,7 @@ TEST(Restart, KilledJobResumesAndRecomputesNoFinishedCurve) {
     slow.Kill();
   }
   ASSERT_GT(total, 20u) << "the sample needs enough tasks for a mid-job kill";
-  const auto before = StoredCurves(data / "gonogo.sqlite");
+  const auto before = StoredCurves(data);
   ASSERT_GE(before.size(), 20u);
   ASSERT_LT(before.size(), total) << "the kill must land mid-job";
 
@@ -85,13 +70,15 @@ TEST(Restart, KilledJobResumesAndRecomputesNoFinishedCurve) {
   EXPECT_EQ(summary["tasks"]["cache_hits"].get<size_t>(), before.size());
 
   // Every curve committed before the crash is still the same row.
-  const auto after = StoredCurves(data / "gonogo.sqlite");
+  const auto after = StoredCurves(data);
   EXPECT_EQ(after.size(), total);
   for (const auto& [key, computed_ms] : before) {
     ASSERT_TRUE(after.count(key));
     EXPECT_EQ(after.at(key), computed_ms) << key;
   }
   EXPECT_EQ(NamesOf(DownloadAll(*stub, job_id)), MapProductNames());
+  EXPECT_EQ(again.Terminate(), 0);
+  EXPECT_EQ(IntegrityCheck(data), "ok");
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <google/protobuf/util/json_util.h>
 #include <signal.h>
+#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -62,6 +63,44 @@ fs::path WriteTokenFile(const fs::path& dir) {
                       << kOpsToken << " ops admin\n";
   fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);
   return path;
+}
+
+std::map<std::string, int64_t> StoredCurves(const fs::path& data_dir) {
+  sqlite3* db = nullptr;
+  std::map<std::string, int64_t> out;
+  if (sqlite3_open_v2((data_dir / "gonogo.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_stmt* s = nullptr;
+    sqlite3_prepare_v2(db, "SELECT cache_key, computed_unix_ms FROM curves", -1, &s, nullptr);
+    while (sqlite3_step(s) == SQLITE_ROW) {
+      out[reinterpret_cast<const char*>(sqlite3_column_text(s, 0))] = sqlite3_column_int64(s, 1);
+    }
+    sqlite3_finalize(s);
+  }
+  sqlite3_close(db);
+  return out;
+}
+
+std::string IntegrityCheck(const fs::path& data_dir) {
+  sqlite3* db = nullptr;
+  std::string answer = "cannot open";
+  if (sqlite3_open_v2((data_dir / "gonogo.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_stmt* s = nullptr;
+    sqlite3_prepare_v2(db, "PRAGMA integrity_check", -1, &s, nullptr);
+    answer.clear();
+    while (sqlite3_step(s) == SQLITE_ROW) answer += reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+    sqlite3_finalize(s);
+  }
+  sqlite3_close(db);
+  return answer;
+}
+
+int CurveCount(v1::MobilityService::Stub& stub) {
+  grpc::ClientContext context;
+  v1::ListTractionCurvesRequest request;
+  request.set_page_size(1000);
+  v1::ListTractionCurvesResponse response;
+  if (!stub.ListTractionCurves(&context, request, &response).ok()) return -1;
+  return response.curves_size();
 }
 
 CliRun Gonogo(const std::string& endpoint, const std::string& args) {

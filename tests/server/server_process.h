@@ -76,6 +76,14 @@ class ServerProcess {
   std::string banner_;
 };
 
+// cache_key -> computed_unix_ms of every curve stored in the database of `data_dir`, read straight
+// from the SQLite file.
+std::map<std::string, int64_t> StoredCurves(const fs::path& data_dir);
+// PRAGMA integrity_check of the database of `data_dir`: "ok" when intact.
+std::string IntegrityCheck(const fs::path& data_dir);
+// The traction curves `stub`'s identity is shown by ListTractionCurves (one page of 1,000).
+int CurveCount(v1::MobilityService::Stub& stub);
+
 // The `gonogo` command line against `endpoint`, stdout and stderr together, and its exit code.
 struct CliRun {
   int exit_code;

@@ -5,7 +5,6 @@
 // signal handling of the supervisor are tested on plain commands.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -23,35 +22,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// cache_key -> computed_unix_ms of every stored curve, read straight from the SQLite file.
-std::map<std::string, int64_t> StoredCurves(const fs::path& data) {
-  sqlite3* db = nullptr;
-  std::map<std::string, int64_t> out;
-  if (sqlite3_open_v2((data / "gonogo.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* s = nullptr;
-    sqlite3_prepare_v2(db, "SELECT cache_key, computed_unix_ms FROM curves", -1, &s, nullptr);
-    while (sqlite3_step(s) == SQLITE_ROW) {
-      out[reinterpret_cast<const char*>(sqlite3_column_text(s, 0))] = sqlite3_column_int64(s, 1);
-    }
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
-  return out;
-}
 
-std::string IntegrityCheck(const fs::path& data) {
-  sqlite3* db = nullptr;
-  std::string answer = "cannot open";
-  if (sqlite3_open_v2((data / "gonogo.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* s = nullptr;
-    sqlite3_prepare_v2(db, "PRAGMA integrity_check", -1, &s, nullptr);
-    answer.clear();
-    while (sqlite3_step(s) == SQLITE_ROW) answer += reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
-  return answer;
-}
 
 // The pid of the gonogo-server process of MPI rank `rank` serving `data` (its command line names
 // the data directory; Open MPI puts the rank in its environment), or 0.
