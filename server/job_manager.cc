@@ -76,11 +76,11 @@ JobInputs JobManager::InputsOf(const std::string& id) const {
   return in;
 }
 
-std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& request,
-                                                         const JobInputs& inputs) const {
+JobManager::ValidatedMap JobManager::Validate(const v1::MapRequest& request,
+                                              const JobInputs& inputs) const {
   Require(request.has_vehicle(), "vehicle", "is missing");
   const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
-  CriteriaFromProto(request.criteria());
+  const mobility::Criteria criteria = CriteriaFromProto(request.criteria());
   Require(!request.tier().empty(), "tier", "is missing");
   const TractionTier& tier = tiers_.Get(request.tier());
   Require(!inputs.cone_index.empty(), "cone_index", "the cone-index raster is required");
@@ -126,9 +126,8 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
     }
   }
   // The work the map makes, bounded before it is accepted.
-  const MapPlan plan = PlanMap(*terrain, vehicle, soil_table, tier,
-                               TractionRequest::SlipSweep(CriteriaFromProto(request.criteria()).slip_step),
-                               request.surrogate_model());
+  MapPlan plan = PlanMap(*terrain, vehicle, soil_table, tier,
+                         TractionRequest::SlipSweep(criteria.slip_step), request.surrogate_model());
   if (static_cast<int64_t>(plan.tasks.size()) > config_.max_tasks_per_job) {
     throw LimitError("vehicle.axles",
                      "the map needs " + std::to_string(plan.tasks.size()) + " traction curves (" +
@@ -138,7 +137,7 @@ std::shared_ptr<geo::TerrainLayers> JobManager::Validate(const v1::MapRequest& r
                          std::to_string(config_.max_tasks_per_job) +
                          " (gonogo-server --max-tasks-per-job)");
   }
-  return terrain;
+  return {std::move(terrain), std::move(plan)};
 }
 
 v1::Job JobManager::Submit(const std::string& id, const std::string& owner,
@@ -454,15 +453,14 @@ void JobManager::RunJob(const std::string& id) {
     report("loading terrain", false);
     v1::MapRequest request;
     Require(request.ParseFromString(rec->request), "request", "stored request is unreadable");
-    const std::shared_ptr<geo::TerrainLayers> terrain = Validate(request, InputsOf(id));
+    // The terrain loaded and planned as at submission: the inputs are re-read, not held in memory
+    // while the job waited.
+    const ValidatedMap validated = Validate(request, InputsOf(id));
+    const std::shared_ptr<geo::TerrainLayers>& terrain = validated.terrain;
+    const MapPlan& plan = validated.plan;
     const mobility::VehicleSpec vehicle = VehicleFromProto(request.vehicle());
     const mobility::Criteria criteria = CriteriaFromProto(request.criteria());
     const TractionTier& tier = tiers_.Get(request.tier());
-    const auto slips = TractionRequest::SlipSweep(criteria.slip_step);
-
-    report("planning terrain units", false);
-    const MapPlan plan = PlanMap(*terrain, vehicle, SoilTableOf(request.soil_table()), tier, slips,
-                                 request.surrogate_model());
     const size_t total = plan.tasks.size();
     std::vector<TractionCurve> curves(total);
     size_t done = 0, hits = 0, similar = 0;

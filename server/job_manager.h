@@ -26,6 +26,7 @@
 #include "gonogo/v1/mobility.pb.h"
 #include "server/curve_resolver.h"
 #include "server/geo/terrain.h"
+#include "server/map_plan.h"
 #include "server/worker_pool.h"
 #include "solvers/common/tier.h"
 
@@ -71,11 +72,15 @@ class JobManager {
   std::string JobDir(const std::string& job_id) const;
   const std::string& data_dir() const { return config_.data_dir; }
 
+  // A map request's terrain, loaded, and its plan (terrain units and traction tasks).
+  struct ValidatedMap {
+    std::shared_ptr<geo::TerrainLayers> terrain;
+    MapPlan plan;
+  };
   // Validates everything a job needs before it is accepted: vehicle, criteria, tier, soil table, the
   // rasters themselves and the number of traction tasks they make. Throws InputError / LimitError
-  // naming the field. Returns the loaded terrain.
-  std::shared_ptr<geo::TerrainLayers> Validate(const v1::MapRequest& request,
-                                               const JobInputs& inputs) const;
+  // naming the field. Returns the loaded terrain and its plan, which the job's run goes on with.
+  ValidatedMap Validate(const v1::MapRequest& request, const JobInputs& inputs) const;
   // Removes the directories under jobs/ that belong to no job: uploads a crash or a kill cut short.
   // Call before serving; returns how many it removed.
   int CollectOrphanUploads();

@@ -29,8 +29,6 @@ namespace {
 
 constexpr size_t kChunkBytes = 1 << 20;
 
-
-
 const char* RoleFileName(v1::RasterRole role) {
   switch (role) {
     case v1::RASTER_ROLE_CONE_INDEX: return "cone_index.tif";

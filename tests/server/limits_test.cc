@@ -29,19 +29,9 @@ class LimitsTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { delete scratch_; }
 
-  static v1::MapRequest SampleRequest() {
-    v1::MapRequest r;
-    r.set_name("sample");
-    r.set_tier("empirical");
-    *r.mutable_vehicle() = FedAlpha();
-    *r.mutable_soil_table() = SampleSoilTable(scratch_->path() / "terrain");
-    return r;
-  }
+  static v1::MapRequest SampleRequest() { return SampleMapRequest(scratch_->path() / "terrain"); }
   static std::vector<std::pair<v1::RasterRole, std::string>> SampleRasters() {
-    const fs::path t = scratch_->path() / "terrain";
-    return {{v1::RASTER_ROLE_CONE_INDEX, ReadFile(t / "cone_index.tif")},
-            {v1::RASTER_ROLE_ELEVATION, ReadFile(t / "elevation.tif")},
-            {v1::RASTER_ROLE_SOIL_CLASS, ReadFile(t / "soil_class.tif")}};
+    return SampleMapRasters(scratch_->path() / "terrain");
   }
   // Entries under the data directory's jobs/ (inputs and products of every job).
   static int JobDirs(const fs::path& data) {

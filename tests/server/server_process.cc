@@ -236,6 +236,21 @@ v1::SoilTable SampleSoilTable(const fs::path& terrain_dir) {
   return t;
 }
 
+v1::MapRequest SampleMapRequest(const fs::path& terrain_dir) {
+  v1::MapRequest r;
+  r.set_name("sample");
+  r.set_tier("empirical");
+  *r.mutable_vehicle() = FedAlpha();
+  *r.mutable_soil_table() = SampleSoilTable(terrain_dir);
+  return r;
+}
+
+std::vector<std::pair<v1::RasterRole, std::string>> SampleMapRasters(const fs::path& terrain_dir) {
+  return {{v1::RASTER_ROLE_CONE_INDEX, ReadFile(terrain_dir / "cone_index.tif")},
+          {v1::RASTER_ROLE_ELEVATION, ReadFile(terrain_dir / "elevation.tif")},
+          {v1::RASTER_ROLE_SOIL_CLASS, ReadFile(terrain_dir / "soil_class.tif")}};
+}
+
 grpc::Status Submit(v1::MobilityService::Stub& stub, const v1::MapRequest& request,
                     const std::vector<std::pair<v1::RasterRole, std::string>>& rasters,
                     v1::Job* job) {

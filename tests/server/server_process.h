@@ -108,6 +108,10 @@ struct MapFiles {
 v1::Vehicle FedAlpha();
 // The soil table written by the sample-terrain script into `terrain_dir`.
 v1::SoilTable SampleSoilTable(const fs::path& terrain_dir);
+// The sample map of a sample terrain in `terrain_dir`: "sample", empirical tier, FED Alpha, the
+// terrain's soil table; and its rasters (cone index, elevation, soil class) for Submit.
+v1::MapRequest SampleMapRequest(const fs::path& terrain_dir);
+std::vector<std::pair<v1::RasterRole, std::string>> SampleMapRasters(const fs::path& terrain_dir);
 // Sends a SubmitMap stream with these rasters (role -> bytes); returns the status.
 grpc::Status Submit(v1::MobilityService::Stub& stub, const v1::MapRequest& request,
                     const std::vector<std::pair<v1::RasterRole, std::string>>& rasters,

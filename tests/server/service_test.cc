@@ -39,19 +39,10 @@ class ServiceTest : public ::testing::Test {
     return ReadFile(scratch_->path() / "terrain" / name);
   }
 
-  static v1::MapRequest SampleRequest() {
-    v1::MapRequest r;
-    r.set_name("sample");
-    r.set_tier("empirical");
-    *r.mutable_vehicle() = FedAlpha();
-    *r.mutable_soil_table() = SampleSoilTable(scratch_->path() / "terrain");
-    return r;
-  }
+  static v1::MapRequest SampleRequest() { return SampleMapRequest(scratch_->path() / "terrain"); }
 
   static std::vector<std::pair<v1::RasterRole, std::string>> SampleRasters() {
-    return {{v1::RASTER_ROLE_CONE_INDEX, Terrain("cone_index.tif")},
-            {v1::RASTER_ROLE_ELEVATION, Terrain("elevation.tif")},
-            {v1::RASTER_ROLE_SOIL_CLASS, Terrain("soil_class.tif")}};
+    return SampleMapRasters(scratch_->path() / "terrain");
   }
 
   // Runs the sample map to the end and returns its summary.
