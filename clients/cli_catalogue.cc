@@ -1,10 +1,13 @@
-// gonogo tiers | soils [MODEL]: what the server offers.
+// gonogo tiers | soils [MODEL] | health: what the server offers, and whether it serves.
+#include <chrono>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "clients/cli_commands.h"
+#include "grpc/health/v1/health.grpc.pb.h"
 
 namespace gonogo::cli {
 namespace {
@@ -69,7 +72,46 @@ int RunSoils(Client& client, const std::string& only) {
   return kExitOk;
 }
 
+// gRPC's standard health check of the MobilityService: SERVING once the server takes work (under
+// MPI, once every worker rank has checked in). With `wait_s` > 0, asks every half second until it
+// serves or the time is up; a server not yet listening counts as not serving.
+int RunHealth(Client& client, double wait_s) {
+  using grpc::health::v1::HealthCheckResponse;
+  auto health = grpc::health::v1::Health::NewStub(client.channel());
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
+  for (;;) {
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    grpc::health::v1::HealthCheckRequest req;
+    req.set_service("gonogo.v1.MobilityService");
+    HealthCheckResponse resp;
+    const grpc::Status s = health->Check(&ctx, req, &resp);
+    const bool serving = s.ok() && resp.status() == HealthCheckResponse::SERVING;
+    if (serving) {
+      std::cout << "SERVING\n";
+      return kExitOk;
+    }
+    if (std::chrono::steady_clock::now() >= deadline) {
+      if (!s.ok()) return Fail(s);
+      std::cout << HealthCheckResponse::ServingStatus_Name(resp.status()) << "\n";
+      return kExitServer;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+}
+
 }  // namespace
+
+Command AddHealthCommand(CLI::App& parent) {
+  auto wait_s = std::make_shared<double>(0.0);
+  CLI::App* health = parent.add_subcommand(
+      "health", "whether the server serves: SERVING once it takes work (under MPI, once every worker rank has checked in)");
+  health->add_option("--wait", *wait_s, "keep asking until it serves or this many seconds pass, s")
+      ->type_name("S")
+      ->check(CLI::NonNegativeNumber.description(""));
+  health->footer("Exit code 0 when SERVING, 3 when not (or not reachable).");
+  return {health, [wait_s](Client& client) { return RunHealth(client, *wait_s); }};
+}
 
 Command AddTiersCommand(CLI::App& parent) {
   CLI::App* tiers =

@@ -147,7 +147,7 @@ void ResolveServer(const std::string& server, Connection* connection) {
 }
 
 Client::Client(const Connection& connection)
-    : stub_(v1::MobilityService::NewStub(OpenChannel(connection))) {}
+    : channel_(OpenChannel(connection)), stub_(v1::MobilityService::NewStub(channel_)) {}
 
 grpc::Status Client::Watch(const std::string& id, v1::JobStatus* last) {
   ProgressBar bar;

@@ -94,8 +94,11 @@ class Client {
                      google::protobuf::Message* summary);
 
   v1::MobilityService::Stub& stub() { return *stub_; }
+  // The channel, for gRPC's standard services (health).
+  const std::shared_ptr<grpc::Channel>& channel() const { return channel_; }
 
  private:
+  std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::MobilityService::Stub> stub_;
 };
 

@@ -34,6 +34,7 @@ Command AddScalabilityCommand(CLI::App& parent);
 // What the server offers (cli_catalogue.cc).
 Command AddTiersCommand(CLI::App& parent);
 Command AddSoilsCommand(CLI::App& parent);
+Command AddHealthCommand(CLI::App& parent);
 
 // The fe-ann tier's models and their training data (cli_training.cc).
 Command AddModelsCommand(CLI::App& parent);

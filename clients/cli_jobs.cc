@@ -251,7 +251,6 @@ Command AddMapCommand(CLI::App& parent) {
       parent.add_subcommand("map", "GO/NO-GO and speed maps of a terrain for a vehicle (a job)");
   map->footer(
       "Submits the job, shows its progress, then downloads its products into --out.\n"
-      "Submits the job, shows its progress, then downloads its products into --out.\n"
       "Give exactly one of --slope and --elevation; --soil-class and --soil-table go "
       "together.\nWith --no-wait the job id is printed and the command returns "
       "(gonogo watch / download ID).");

@@ -7,7 +7,7 @@
 //   gonogo COMMAND --help      a command's options with their units and defaults
 //
 // The commands live in cli_jobs.cc (map, jobs, watch, cancel, download), cli_curve.cc (curve,
-// scalability), cli_catalogue.cc (tiers, soils) and cli_training.cc (models, train, dataset). Options are parsed by CLI11: a mistyped or
+// scalability), cli_catalogue.cc (tiers, soils, health) and cli_training.cc (models, train, dataset). Options are parsed by CLI11: a mistyped or
 // unknown option, a missing required one or a value that does not convert is a usage error.
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -87,7 +87,8 @@ int main(int argc, char** argv) {
       AddMapCommand(app),         AddJobsCommand(app),     AddWatchCommand(app),
       AddCancelCommand(app),      AddDeleteCommand(app),   AddDownloadCommand(app), AddCurveCommand(app),
       AddScalabilityCommand(app), AddTiersCommand(app),    AddSoilsCommand(app),
-      AddModelsCommand(app),      AddTrainCommand(app),    AddDatasetCommand(app)};
+      AddModelsCommand(app),      AddTrainCommand(app),    AddDatasetCommand(app),
+      AddHealthCommand(app)};
   // After the subcommands: they would inherit it.
   app.footer(
       "Run gonogo COMMAND --help for a command's options.\n"

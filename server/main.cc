@@ -20,10 +20,13 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -253,6 +256,49 @@ void MakePrivate(const std::filesystem::path& data_dir) {
   }
 }
 
+// One server per data directory: two would resume the same jobs and write the same products. An
+// exclusive flock on DATA_DIR/gonogo.lock, held for the process's life (the kernel drops it when
+// the process ends, however it ends); the file names the holder for the error a second server
+// gives. Linux NFS clients implement flock with NFS locks, so this also holds across the nodes of a
+// cluster; on a file system without locks (Lustre mounted without -o flock) it warns and goes on.
+class DataDirLock {
+ public:
+  explicit DataDirLock(const std::string& data_dir) {
+    const std::string path = (std::filesystem::path(data_dir) / "gonogo.lock").string();
+    fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0600);
+    if (fd_ < 0) throw std::runtime_error("--data-dir " + data_dir + ": cannot create " + path);
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      if (errno == EWOULDBLOCK) {
+        char holder[256] = {0};
+        const ssize_t n = pread(fd_, holder, sizeof holder - 1, 0);
+        std::string who(holder, n > 0 ? static_cast<size_t>(n) : 0);
+        while (!who.empty() && (who.back() == '\n' || who.back() == ' ')) who.pop_back();
+        close(fd_);
+        throw std::runtime_error("--data-dir " + data_dir + " is in use by another gonogo-server (" +
+                                 (who.empty() ? "unknown" : who) +
+                                 "): one server per data directory; stop it or choose another directory");
+      }
+      spdlog::warn("--data-dir {}: the file system does not lock files ({}); make sure no other "
+                   "gonogo-server uses this directory", data_dir, std::strerror(errno));
+      return;
+    }
+    char host[256] = {0};
+    gethostname(host, sizeof host - 1);
+    const std::string who = "pid " + std::to_string(getpid()) + " on " + host + "\n";
+    if (ftruncate(fd_, 0) != 0 || pwrite(fd_, who.data(), who.size(), 0) < 0) {
+      spdlog::warn("--data-dir {}: cannot write the lock file's holder", data_dir);
+    }
+  }
+  ~DataDirLock() {
+    if (fd_ >= 0) close(fd_);  // releases the lock
+  }
+  DataDirLock(const DataDirLock&) = delete;
+  DataDirLock& operator=(const DataDirLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::WorkerPool& pool,
           const sigset_t& signals) {
   using namespace gonogo;
@@ -265,6 +311,7 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   }
   const Transport transport = ChooseTransport(o, authenticator);
   MakePrivate(o.data_dir);
+  const DataDirLock data_dir_lock(o.data_dir);
   cache::Database db((std::filesystem::path(o.data_dir) / "gonogo.sqlite").string());
 
   server::JobManagerConfig config;
@@ -317,8 +364,9 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
     spdlog::error("cannot listen on {}", o.listen);
     return 1;
   }
-  server->GetHealthCheckService()->SetServingStatus(kServiceName, true);
-  server->GetHealthCheckService()->SetServingStatus("", true);
+  // Health stays NOT_SERVING until every worker rank has checked in (below); jobs queue meanwhile.
+  server->GetHealthCheckService()->SetServingStatus(kServiceName, false);
+  server->GetHealthCheckService()->SetServingStatus("", false);
   jobs.Start();
 
   const std::string host = o.listen.substr(0, o.listen.rfind(':'));
@@ -330,10 +378,22 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   std::cout << ", data " << o.data_dir << ", " << resumed << " jobs resumed; " << transport.description
             << ")" << std::endl;
 
+  // SERVING once every worker is ready (at once for threads; under MPI when each rank has checked
+  // in), unless a signal comes first.
+  int sig = 0;
+  if (pool.ReadyWorkers() < pool.Workers()) {
+    spdlog::info("waiting for {} worker ranks to check in", pool.Workers() - pool.ReadyWorkers());
+  }
+  const timespec tick{0, 100'000'000};
+  while (sig <= 0 && pool.ReadyWorkers() < pool.Workers()) sig = sigtimedwait(&signals, nullptr, &tick);
+  if (sig <= 0) {
+    server->GetHealthCheckService()->SetServingStatus(kServiceName, true);
+    server->GetHealthCheckService()->SetServingStatus("", true);
+    spdlog::info("SERVING: {} of {} workers ready", pool.ReadyWorkers(), pool.Workers());
+    sigwait(&signals, &sig);
+  }
   // SIGTERM / SIGINT drain: refuse new work, report NOT_SERVING, stop the scheduler (the running
   // job returns to QUEUED), then stop gRPC and the pool.
-  int sig = 0;
-  sigwait(&signals, &sig);
   spdlog::info("signal {}: draining", sig);
   service.SetDraining();
   server->GetHealthCheckService()->SetServingStatus(kServiceName, false);

@@ -17,7 +17,8 @@ namespace gonogo::server {
 
 namespace {
 
-enum Tag : int { kTagTask = 1, kTagResult = 2, kTagCancel = 3, kTagStop = 4, kTagProgress = 5 };
+enum Tag : int { kTagTask = 1, kTagResult = 2, kTagCancel = 3, kTagStop = 4, kTagProgress = 5,
+             kTagHello = 6 };
 
 // Back-off for idle polling: 50 us doubling to 5 ms, reset by any message.
 class Backoff {
@@ -93,6 +94,7 @@ std::string RanksLabel(const std::vector<int>& ranks) {
 void MpiPool::CommLoop() {
   // busy[w]: the task world rank w is working on (shared by the members of a group).
   std::vector<std::shared_ptr<Running>> busy(world_size_);
+  std::vector<bool> checked_in(world_size_, false);
   std::map<uint64_t, std::shared_ptr<Running>> running;  // by task id
   int next_group_tag = 1;
   Backoff backoff;
@@ -115,10 +117,11 @@ void MpiPool::CommLoop() {
       // does not fit holds the free ranks until it does.
       std::vector<int> free_ranks;
       for (int w = 1; w < world_size_; ++w) {
-        if (!busy[w]) free_ranks.push_back(w);
+        if (checked_in[w] && !busy[w]) free_ranks.push_back(w);
       }
       while (const Entry* next = queue_.Peek()) {
         const int wanted = std::clamp(next->task.needs.ranks, 1, world_size_ - 1);
+        // Until every rank has checked in, a group may not find its ranks yet: it waits.
         if (static_cast<int>(free_ranks.size()) < wanted) break;
         auto task = std::make_shared<Running>();
         task->entry = queue_.Pop();
@@ -156,6 +159,21 @@ void MpiPool::CommLoop() {
           Send(std::string(reinterpret_cast<const char*>(&id), sizeof id), r, kTagCancel);
         }
         task->cancel_sent = true;
+      }
+    }
+    // Worker ranks checking in.
+    for (;;) {
+      int flag = 0;
+      MPI_Status status;
+      MPI_Iprobe(MPI_ANY_SOURCE, kTagHello, MPI_COMM_WORLD, &flag, &status);
+      if (!flag) break;
+      int from = 0;
+      Receive(status.MPI_SOURCE, kTagHello, &from);
+      did_work = true;
+      if (!checked_in[from]) {
+        checked_in[from] = true;
+        const int ready = ++ready_workers_;
+        spdlog::debug("rank {} checked in ({} of {})", from, ready, world_size_ - 1);
       }
     }
     // Progress reports of running tasks.
@@ -299,6 +317,7 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
 }  // namespace
 
 void RunMpiWorker(const TierRegistry& tiers, int rank) {
+  Send("", 0, kTagHello);
   Backoff backoff;
   for (;;) {
     int flag = 0;

@@ -2,7 +2,8 @@
 // thread is the only thread of the process that calls MPI; ranks 1..N-1 run RunMpiWorker().
 //
 // Messages (tags): rank 0 -> worker TASK (a serialised v1.WorkerTask), CANCEL (the 8-byte task id),
-// STOP (empty); worker -> rank 0 RESULT (a serialised v1.WorkerResult) and PROGRESS (a
+// STOP (empty); worker -> rank 0 HELLO (empty, once, when its loop starts: the rank has checked
+// in and gets tasks from then on), RESULT (a serialised v1.WorkerResult) and PROGRESS (a
 // v1.WorkerProgress, at most twice a second). A worker holds at most one task. Idle loops poll with
 // MPI_Iprobe and an exponential back-off sleep instead of blocking in MPI_Recv, which would spin a
 // core at 100 % (PLATFORM-NOTES).
@@ -45,6 +46,7 @@ class MpiPool : public WorkerPool {
   void Submit(TaskSpec task, TaskCallback done) override;
   void Cancel(uint64_t task_id) override;
   int Workers() const override { return world_size_ - 1; }
+  int ReadyWorkers() const override { return ready_workers_.load(); }
   std::string Describe() const override;
   // Stops every worker rank (they return from RunMpiWorker) and joins the communication thread.
   void Shutdown() override;
@@ -65,6 +67,7 @@ class MpiPool : public WorkerPool {
   void CommLoop();
 
   const int world_size_;
+  std::atomic<int> ready_workers_{0};
   std::mutex mutex_;
   TwoLaneQueue<Entry> queue_;
   std::vector<uint64_t> cancels_;

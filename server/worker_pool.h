@@ -74,6 +74,8 @@ class WorkerPool {
   // Cancels a queued task (its callback runs with cancelled = true) or asks a running one to stop.
   virtual void Cancel(uint64_t task_id) = 0;
   virtual int Workers() const = 0;
+  // Workers ready for tasks: all of them for threads; under MPI, the ranks that have checked in.
+  virtual int ReadyWorkers() const { return Workers(); }
   virtual std::string Describe() const = 0;
   // Stops accepting work, cancels what is queued and joins the threads.
   virtual void Shutdown() = 0;
