@@ -1,0 +1,188 @@
+"""The Python client against a real gonogo-server on a loopback port (started here, with a token).
+
+Run by ctest as python_client_test; by hand:
+    GONOGO_BUILD_DIR=build PYTHONPATH=build/python python3 -m pytest clients/python/tests
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+import grpc
+import numpy as np
+import pytest
+
+import gonogo
+
+SOURCE_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+BUILD_DIR = os.path.abspath(os.environ.get("GONOGO_BUILD_DIR", os.path.join(SOURCE_DIR, "build")))
+VEHICLE = os.path.join(SOURCE_DIR, "clients", "vehicles", "fed_alpha.json")
+
+
+@pytest.fixture(scope="session")
+def server(tmp_path_factory):
+    work = tmp_path_factory.mktemp("server")
+    endpoint_file = work / "endpoint"
+    proc = subprocess.Popen(
+        [os.path.join(BUILD_DIR, "server", "gonogo-server"), "--data-dir", str(work / "data"),
+         "--listen", "127.0.0.1:0", "--endpoint-file", str(endpoint_file), "--generate-token",
+         "--threads", "2"],
+        stdout=subprocess.DEVNULL, stderr=open(work / "server.log", "w"))
+    for _ in range(200):
+        if endpoint_file.exists() and endpoint_file.stat().st_size > 0:
+            break
+        time.sleep(0.05)
+    else:
+        proc.kill()
+        pytest.fail("gonogo-server did not write its endpoint file: " + (work / "server.log").read_text())
+    yield str(endpoint_file)
+    proc.terminate()
+    proc.wait(timeout=30)
+
+
+@pytest.fixture(scope="session")
+def terrain(tmp_path_factory):
+    out = tmp_path_factory.mktemp("terrain")
+    subprocess.run([sys.executable, os.path.join(SOURCE_DIR, "clients", "sample-data", "make_sample_terrain.py"),
+                    "--out", str(out), "--size", "40"], check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
+@pytest.fixture
+def client(server):
+    with gonogo.Client("@" + server) as c:
+        yield c
+
+
+def test_map_from_paths_waits_downloads_and_returns_georeferenced_arrays(client, terrain, tmp_path):
+    job = client.submit_map(tier="empirical", vehicle=VEHICLE, cone_index=str(terrain / "cone_index.tif"),
+                            elevation=str(terrain / "elevation.tif"), soil_class=str(terrain / "soil_class.tif"),
+                            soil_table=str(terrain / "soil_table.json"), name="python paths")
+    seen = []
+    status = job.wait(progress=seen.append)
+    assert status.state == gonogo.client.pb.JOB_STATE_DONE
+    assert seen and seen[-1].tasks_done == seen[-1].tasks_total > 0
+    files = job.download(tmp_path / "out")
+    names = {os.path.basename(f) for f in files}
+    assert {"gonogo.tif", "speed.tif", "summary.json"} <= names
+    summary = json.load(open(tmp_path / "out" / "summary.json"))
+    rasters = job.rasters(tmp_path / "arrays")
+    cone = gonogo.read_raster(terrain / "cone_index.tif")
+    classes = rasters["gonogo"]
+    assert classes.array.shape == cone.array.shape
+    assert classes.geotransform == pytest.approx(cone.geotransform)
+    assert "UTM" in classes.crs or "Transverse_Mercator" in classes.crs
+    valid = classes.array != 255
+    assert int(valid.sum()) == summary["cells"]["valid"]
+    assert set(np.unique(classes.array[valid])) <= {0, 1, 2}
+    assert rasters["speed"].array.dtype == np.float32
+
+
+def test_map_from_arrays_matches_the_map_from_files(client, terrain):
+    cone = gonogo.read_raster(terrain / "cone_index.tif")
+    elevation = gonogo.read_raster(terrain / "elevation.tif")
+    from_files = client.submit_map(tier="empirical", vehicle=VEHICLE, cone_index=str(terrain / "cone_index.tif"),
+                                   elevation=str(terrain / "elevation.tif"))
+    from_arrays = client.submit_map(tier="empirical", vehicle=json.load(open(VEHICLE)),
+                                    cone_index=(cone.array, cone.geotransform, cone.crs, cone.nodata),
+                                    elevation=elevation)
+    from_files.wait()
+    from_arrays.wait()
+    a, b = from_files.rasters()["gonogo"], from_arrays.rasters()["gonogo"]
+    np.testing.assert_array_equal(a.array, b.array)
+    assert a.geotransform == pytest.approx(b.geotransform)
+
+
+def test_curve_is_a_structured_array_in_si_units(client, server):
+    curve = client.curve(tier="empirical", vehicle=VEHICLE, cone_index_kpa=300, slip_step=0.05,
+                         as_dataframe=False)
+    points = curve.points
+    assert points.dtype == gonogo.CURVE_DTYPE
+    assert len(points) == 21
+    assert points["slip"][0] == pytest.approx(0.0) and points["slip"][-1] == pytest.approx(1.0)
+    # The same points the CLI prints for the same wheel and soil.
+    csv = subprocess.run([os.path.join(BUILD_DIR, "clients", "gonogo"), "--server", "@" + server, "curve",
+                          "--tier", "empirical", "--vehicle", VEHICLE, "--cone-index", "300", "--csv"],
+                         check=True, capture_output=True, text=True).stdout
+    rows = [line for line in csv.splitlines() if line and line[0].isdigit()]
+    cli = np.array([[float(x) for x in line.split(",")] for line in rows])
+    assert cli.shape == (21, 7)
+    for i, name in enumerate(gonogo.CURVE_DTYPE.names):
+        np.testing.assert_allclose(points[name], cli[:, i], rtol=1e-5, atol=1e-6, err_msg=name)  # the CSV has 6 digits
+    assert curve.provenance["tier"] == "empirical"
+    # The same query again is a cache hit, listed by list_curves.
+    again = client.curve(tier="empirical", vehicle=VEHICLE, cone_index_kpa=300, slip_step=0.05,
+                         as_dataframe=False)
+    assert again.provenance.get("cache_hit") is True
+    keys = [c.provenance["cache_key"] for c in client.list_curves(tier="empirical", as_dataframe=False)]
+    assert curve.provenance["cache_key"] in keys
+
+
+def test_scalability_rows_per_scale(client):
+    report = client.scalability(tier="bekker", vehicle=VEHICLE, soil="lll_dry_sand", scales=(1.0, 0.5))
+    assert [r.scale for r in report.rows] == [1.0, 0.5]
+    assert len(report.rows[0].points) > 0
+    assert report.plot_png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_refusals_carry_the_grpc_code_and_the_field(client, terrain, server):
+    with pytest.raises(gonogo.GonogoError) as bad_tier:
+        client.curve(tier="no-such-tier", vehicle=VEHICLE, cone_index_kpa=300)
+    assert bad_tier.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert bad_tier.value.field == "tier"
+    heavy = json.load(open(VEHICLE))
+    heavy["mass_kg"] = 1e9
+    with pytest.raises(gonogo.GonogoError) as implausible:
+        client.submit_map(tier="empirical", vehicle=heavy, cone_index=str(terrain / "cone_index.tif"),
+                          elevation=str(terrain / "elevation.tif"))
+    assert implausible.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert implausible.value.field == "vehicle.mass_kg"
+    with pytest.raises(gonogo.GonogoError) as unknown:
+        client.job("job-000000000000")
+    assert unknown.value.code == grpc.StatusCode.NOT_FOUND
+    with pytest.raises(gonogo.InputError) as missing:
+        client.submit_map(tier="empirical", vehicle=VEHICLE, cone_index=str(terrain / "missing.tif"),
+                          elevation=str(terrain / "elevation.tif"))
+    assert missing.value.field == "cone_index"
+    host_port, _ = gonogo.read_endpoint_file(server)
+    with gonogo.Client(host_port, token="not-the-token") as stranger, pytest.raises(gonogo.GonogoError) as denied:
+        stranger.tiers()
+    assert denied.value.code == grpc.StatusCode.UNAUTHENTICATED
+
+
+def _run_module(server, *args):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, "-m", "gonogo", "--server", "@" + server, *args],
+                          capture_output=True, text=True, env=env)
+
+
+def _has_colour(png, hex_colour):
+    import matplotlib.image
+    image = matplotlib.image.imread(png)[:, :, :3]
+    rgb = np.array([int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5)])
+    return bool(np.any(np.all(np.abs(image - rgb) < 0.02, axis=-1)))
+
+
+def test_the_plot_command_line(client, terrain, server, tmp_path):
+    job = client.submit_map(tier="empirical", vehicle=VEHICLE, cone_index=str(terrain / "cone_index.tif"),
+                            elevation=str(terrain / "elevation.tif"), name="quicklook")
+    job.wait()
+    summary_dir = tmp_path / "products"
+    job.download(summary_dir, "summary.json")
+    classes = json.load(open(summary_dir / "summary.json"))["classes"]
+    done = _run_module(server, "quicklook", job.id, "--out", str(tmp_path / "map.png"))
+    assert done.returncode == 0, done.stderr
+    # Every class the summary counts is drawn in its legend colour.
+    for code, (name, colour) in gonogo.plots.CLASS_COLOURS.items():
+        if classes[name]["percent_of_valid"] > 1:
+            assert _has_colour(tmp_path / "map.png", colour), name
+    for command in (["curve", "--tier", "bekker", "--soil", "lll_dry_sand"],
+                    ["scalability", "--tier", "bekker", "--soil", "lll_dry_sand", "--scales", "1,0.5"]):
+        out = tmp_path / (command[0] + ".png")
+        done = _run_module(server, *command, "--vehicle", VEHICLE, "--out", str(out))
+        assert done.returncode == 0, done.stderr
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10000
+    refused = _run_module(server, "curve", "--tier", "no-such-tier", "--cone-index", "300", "--vehicle", VEHICLE,
+                          "--out", str(tmp_path / "x.png"))
+    assert refused.returncode == 3 and "INVALID_ARGUMENT" in refused.stderr
