@@ -45,7 +45,7 @@ chown munge:munge "$state/munge"
 chmod 0755 "$state/munge"
 cat > "$conf" <<CONF
 ClusterName=gonogo-local
-SlurmctldHost=$node
+SlurmctldHost=$node(127.0.0.1)
 SlurmUser=root
 SlurmctldPort=${GONOGO_SLURMCTLD_PORT:-6817}
 SlurmdPort=${GONOGO_SLURMD_PORT:-6818}
@@ -68,7 +68,7 @@ ReturnToService=2
 KillWait=30
 MinJobAge=3600
 SchedulerType=sched/backfill
-NodeName=$node CPUs=$cpus RealMemory=$memory_mb State=UNKNOWN
+NodeName=$node NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory_mb State=UNKNOWN
 PartitionName=debug Nodes=$node Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO
 CONF
 

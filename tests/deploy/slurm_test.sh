@@ -39,6 +39,8 @@ mkdir -p "$submit"
 cd "$submit"
 /usr/bin/python3 "$source_dir/clients/sample-data/make_sample_terrain.py" --out terrain --size 60 >/dev/null
 export GONOGO_HOME=$source_dir GONOGO_BUILD_DIR=$build_dir GONOGO_DATA_DIR=$work/data
+# The service listens on the node's name by default; where that name does not resolve, on loopback.
+getent hosts "$(hostname)" > /dev/null || export GONOGO_LISTEN=127.0.0.1:0
 gonogo=("$build_dir/clients/gonogo" --server @gonogo-endpoint)
 map_args=(--cone-index terrain/cone_index.tif --elevation terrain/elevation.tif
           --soil-class terrain/soil_class.tif --soil-table terrain/soil_table.json
