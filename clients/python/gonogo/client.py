@@ -84,6 +84,18 @@ def _message_from(value, message_type, field):
         raise InputError(field, str(e)) from None
 
 
+def _soil(cone_index_kpa, soil_name, soil_parameters):
+    """A pb.SoilState: cone index (kPa, sent in Pa), a catalogue name and/or explicit parameters."""
+    state = pb.SoilState()
+    if cone_index_kpa is not None:
+        state.cone_index_pa = cone_index_kpa * 1000.0
+    if soil_name:
+        state.soil_name = soil_name
+    if soil_parameters:
+        state.parameters.CopyFrom(_message_from(dict(soil_parameters), pb.SoilParameterSet, "soil_parameters"))
+    return state
+
+
 def curve_points(points):
     """TractionPoint messages as a NumPy structured array (CURVE_DTYPE)."""
     return np.array([tuple(getattr(p, name) for name in CURVE_DTYPE.names) for p in points],
@@ -311,6 +323,14 @@ class Client:
             share = front if axle == 1 else 1 - front
         return a.tyre, v.mass_kg * GRAVITY_M_S2 * share / max(a.wheels, 1)
 
+    def _wheel(self, vehicle, axle, tyre, wheel_load_n):
+        """(tyre message, wheel load N): a vehicle's axle, or a tyre with its load."""
+        if vehicle is not None:
+            return self.wheel_of(vehicle, axle)
+        if tyre is None or wheel_load_n is None:
+            raise InputError("tyre", "give a vehicle, or a tyre with wheel_load_n")
+        return _message_from(dict(tyre), pb.Tyre, "tyre"), wheel_load_n
+
     def curve(self, *, tier, vehicle=None, axle=1, tyre=None, wheel_load_n=None, cone_index_kpa=None,
               soil=None, soil_parameters=None, slip_step=0.0, similarity=True, model=None,
               as_dataframe=None):
@@ -320,22 +340,11 @@ class Client:
         The wheel: a vehicle's axle (vehicle=..., axle=1 front), or tyre (dict of pb.Tyre fields, m,
         Pa) with wheel_load_n. The soil: cone_index_kpa, a catalogue soil name, and/or
         soil_parameters {"model": ..., "values": {...}} in the units `gonogo soils` lists."""
-        if vehicle is not None:
-            tyre_message, load = self.wheel_of(vehicle, axle)
-        else:
-            if tyre is None or wheel_load_n is None:
-                raise InputError("tyre", "give a vehicle, or a tyre with wheel_load_n")
-            tyre_message, load = _message_from(dict(tyre), pb.Tyre, "tyre"), wheel_load_n
+        tyre_message, load = self._wheel(vehicle, axle, tyre, wheel_load_n)
         request = pb.GetTractionCurveRequest(tier=tier, wheel_load_n=load, slip_step=slip_step,
                                              disable_similarity=not similarity, surrogate_model=model or "")
         request.tyre.CopyFrom(tyre_message)
-        if cone_index_kpa is not None:
-            request.soil.cone_index_pa = cone_index_kpa * 1000.0
-        if soil:
-            request.soil.soil_name = soil
-        if soil_parameters:
-            request.soil.parameters.CopyFrom(_message_from(dict(soil_parameters), pb.SoilParameterSet,
-                                                           "soil_parameters"))
+        request.soil.CopyFrom(_soil(cone_index_kpa, soil, soil_parameters))
         return Curve(_call(self._stub.GetTractionCurve, request, metadata=self._metadata), as_dataframe)
 
     def list_curves(self, *, tier="", soil="", min_cone_index_kpa=0.0, max_cone_index_kpa=0.0,
@@ -357,19 +366,11 @@ class Client:
                     cone_index_kpa=None, soil=None, scales=(1.0, 0.5, 0.25), slip_step=0.0):
         """Seed 001's scaled-tyre study: the pb.ScalabilityReport (rows per scale with their points
         and the percent inside the full-scale band; plot_png the server's plot)."""
-        if vehicle is not None:
-            tyre_message, load = self.wheel_of(vehicle, axle)
-        else:
-            if tyre is None or wheel_load_n is None:
-                raise InputError("tyre", "give a vehicle, or a tyre with wheel_load_n")
-            tyre_message, load = _message_from(dict(tyre), pb.Tyre, "tyre"), wheel_load_n
+        tyre_message, load = self._wheel(vehicle, axle, tyre, wheel_load_n)
         request = pb.ScalabilityRequest(tier=tier, wheel_load_n=load, scales=list(scales),
                                         slip_step=slip_step)
         request.tyre.CopyFrom(tyre_message)
-        if cone_index_kpa is not None:
-            request.soil.cone_index_pa = cone_index_kpa * 1000.0
-        if soil:
-            request.soil.soil_name = soil
+        request.soil.CopyFrom(_soil(cone_index_kpa, soil, None))
         return _call(self._stub.RunScalability, request, metadata=self._metadata)
 
     def tiers(self):
