@@ -25,9 +25,10 @@ packages=(
   # fuzzing the parsers of untrusted bytes: clang with libFuzzer and the sanitizers (deploy/fuzz.sh)
   clang libclang-rt-dev
   # deployment under Slurm, tested with real daemons on one machine (deploy/slurm), and the Python
-  # client (clients/python): Debian's gRPC and protobuf for Python, pytest, matplotlib for its plots
+  # client (clients/python): Debian's gRPC and protobuf for Python, pytest, matplotlib for its plots,
+  # pandas for its DataFrames
   slurmctld slurmd slurm-client munge
-  python3-grpcio python3-protobuf python3-pytest python3-matplotlib python3-numpy
+  python3-grpcio python3-protobuf python3-pytest python3-matplotlib python3-numpy python3-pandas
 )
 
 missing=()

@@ -186,3 +186,14 @@ def test_the_plot_command_line(client, terrain, server, tmp_path):
     refused = _run_module(server, "curve", "--tier", "no-such-tier", "--cone-index", "300", "--vehicle", VEHICLE,
                           "--out", str(tmp_path / "x.png"))
     assert refused.returncode == 3 and "INVALID_ARGUMENT" in refused.stderr
+
+
+def test_curve_as_a_dataframe_when_pandas_is_installed(client):
+    pandas = pytest.importorskip("pandas")
+    curve = client.curve(tier="empirical", vehicle=VEHICLE, cone_index_kpa=250)
+    assert isinstance(curve.points, pandas.DataFrame)
+    assert list(curve.points.columns) == list(gonogo.CURVE_DTYPE.names)
+    array = client.curve(tier="empirical", vehicle=VEHICLE, cone_index_kpa=250, as_dataframe=False).points
+    np.testing.assert_array_equal(curve.points["drawbar_pull_n"].to_numpy(), array["drawbar_pull_n"])
+    figure = gonogo.plots.plot_curves(curve)  # plots take either form
+    assert len(figure.axes) == 4
