@@ -152,7 +152,8 @@ class Job:
     def wait(self, progress=False, timeout_s=None):
         """Follows the job until it ends. Returns its last status when DONE; raises JobFailed when it
         FAILED or was cancelled. `progress`: a bar on stderr (True) or a callable given each status."""
-        show = progress if callable(progress) else (_print_progress if progress else None)
+        bar = _ProgressBar() if progress and not callable(progress) else None
+        show = bar or (progress if callable(progress) else None)
         last = None
         try:
             stream = self._client._stub.WatchJob(pb.WatchJobRequest(job_id=self.id),
@@ -164,7 +165,7 @@ class Job:
         except grpc.RpcError as e:
             raise GonogoError.from_rpc_error(e) from None
         finally:
-            if show is _print_progress:
+            if bar:
                 sys.stderr.write("\n")
         if last is None:
             last = self.status()
@@ -212,21 +213,24 @@ class Job:
         return f"Job({self.id}, {self.state})"
 
 
-_last_shown = [None]
+class _ProgressBar:
+    """A progress bar on stderr for one job, redrawn when the percentage or the state changes (not
+    on every finished task)."""
 
+    def __init__(self):
+        self._shown = None
 
-def _print_progress(status):
-    # Redrawn when the percentage or the state changes, not on every finished task.
-    shown = (int(100 * status.fraction_done), status.state)
-    if shown == _last_shown[0]:
-        return
-    _last_shown[0] = shown
-    width = 30
-    done = int(width * status.fraction_done)
-    sys.stderr.write("\r[%s%s] %3d%%  tasks %d/%d  cache hits %d  %s" % (
-        "#" * done, "-" * (width - done), int(100 * status.fraction_done), status.tasks_done,
-        status.tasks_total, status.cache_hits, pb.JobState.Name(status.state).replace("JOB_STATE_", "")))
-    sys.stderr.flush()
+    def __call__(self, status):
+        shown = (int(100 * status.fraction_done), status.state)
+        if shown == self._shown:
+            return
+        self._shown = shown
+        width = 30
+        done = int(width * status.fraction_done)
+        sys.stderr.write("\r[%s%s] %3d%%  tasks %d/%d  cache hits %d  %s" % (
+            "#" * done, "-" * (width - done), shown[0], status.tasks_done, status.tasks_total,
+            status.cache_hits, pb.JobState.Name(status.state).replace("JOB_STATE_", "")))
+        sys.stderr.flush()
 
 
 class Client:
