@@ -69,8 +69,6 @@ struct CommandLine {
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
   int epochs = 300;
-  int rollout_steps = 8;
-  int rollout_epochs = 0;  // > 0: rollout training after the epochs (TrainingOptions)
   int threads = 2;
   std::string out;
 };
@@ -266,16 +264,6 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
               "%.1f deg)\n",
               name.c_str(), ensemble.envelope().tensile_limit_pa, ratio,
               std::asin((1 - ratio) / (1 + ratio)) * 180 / M_PI);
-  if (reports.front().rollout_final_loss > 0) {
-    double first = 0, last = 0;
-    for (const TrainingReport& report : reports) {
-      first += report.rollout_first_loss / reports.size();
-      last += report.rollout_final_loss / reports.size();
-    }
-    std::printf("# %s: rollout loss (stress error^2 over the training stresses' variance) %.3g "
-                "-> %.3g\n",
-                name.c_str(), first, last);
-  }
   std::fflush(stdout);
   if (!line.out.empty()) ensemble.Save(line.out + "/" + name);
   if (!line.register_data_dir.empty()) {
@@ -527,20 +515,14 @@ int Run(const CommandLine& line) {
     TrainingOptions options;
     options.epochs = line.epochs;
     options.batch_size = 64;
-    options.rollout_steps = line.rollout_steps;
-    options.rollout_epochs = line.rollout_epochs;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
         SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
     const double train_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - train_start).count();
-    std::string name = architecture.Describe();
-    if (line.rollout_epochs > 0) {
-      name += "-rollout" + std::to_string(line.rollout_steps) + "x" +
-              std::to_string(line.rollout_epochs);
-    }
-    ReportEnsemble(line, study, ensemble, name, line.epochs, reports, train_s, "");
+    ReportEnsemble(line, study, ensemble, architecture.Describe(), line.epochs, reports, train_s,
+                   "");
   }
   return 0;
 }
@@ -625,14 +607,6 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--epochs", line.epochs, "training epochs")
       ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--rollout-epochs", line.rollout_epochs,
-                 "epochs of rollout training after --epochs (the network fed its own stresses "
-                 "over windows of --rollout-steps steps); 0: none")
-      ->check(CLI::Range(0, 100000))
-      ->capture_default_str();
-  app.add_option("--rollout-steps", line.rollout_steps, "steps per rollout window")
-      ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   app.add_option("--threads", line.threads, "OpenMP threads generating the paths")
       ->check(CLI::Range(1, 1024))

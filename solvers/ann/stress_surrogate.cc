@@ -36,64 +36,6 @@ torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, int columns
   return x;
 }
 
-// Every window of `steps` consecutive steps of the histories, for training on the network's own
-// stresses: per window the recorded stress before its first step, and per step the strain
-// increment, the strain accumulated before it, the step's rotation as the linear map it makes of
-// Voigt stresses (sigma -> R sigma R^T) and the recorded stress after it.
-struct RolloutWindows {
-  torch::Tensor start_stress;        // [W, 6] Pa
-  torch::Tensor strain_increments;   // [W, K, 6]
-  torch::Tensor accumulated_strain;  // [W, K, 6]
-  torch::Tensor rotations;           // [W, K, 6, 6]
-  torch::Tensor stress_after;        // [W, K, 6] Pa
-};
-
-RolloutWindows RolloutWindowsOf(const std::vector<StrainHistory>& histories,
-                                const std::vector<std::vector<SurrogateInput>>& inputs, int steps) {
-  std::vector<std::pair<std::size_t, std::size_t>> starts;  // (history, first step)
-  for (std::size_t h = 0; h < histories.size(); ++h) {
-    for (std::size_t s = 0; s + steps <= histories[h].steps(); ++s) starts.emplace_back(h, s);
-  }
-  if (starts.empty()) {
-    throw InputError("training.rollout_steps",
-                     "longer than every training history (" + std::to_string(steps) + " steps)");
-  }
-  const auto windows = static_cast<std::int64_t>(starts.size());
-  RolloutWindows out;
-  out.start_stress = torch::empty({windows, 6}, torch::kFloat64);
-  out.strain_increments = torch::empty({windows, steps, 6}, torch::kFloat64);
-  out.accumulated_strain = torch::empty({windows, steps, 6}, torch::kFloat64);
-  out.rotations = torch::empty({windows, steps, 6, 6}, torch::kFloat64);
-  out.stress_after = torch::empty({windows, steps, 6}, torch::kFloat64);
-  double* start_stress = out.start_stress.data_ptr<double>();
-  double* increments = out.strain_increments.data_ptr<double>();
-  double* accumulated = out.accumulated_strain.data_ptr<double>();
-  double* rotations = out.rotations.data_ptr<double>();
-  double* after = out.stress_after.data_ptr<double>();
-  for (std::int64_t w = 0; w < windows; ++w) {
-    const auto [h, first] = starts[w];
-    for (int c = 0; c < 6; ++c) start_stress[w * 6 + c] = inputs[h][first].stress_pa[c];
-    for (int k = 0; k < steps; ++k) {
-      const std::size_t s = first + k;
-      const SurrogateInput& input = inputs[h][s];
-      const std::int64_t row = (w * steps + k) * 6;
-      const Matrix3 rotation = material::HughesWinget(histories[h].increments[s]).rotation;
-      for (int c = 0; c < 6; ++c) {
-        increments[row + c] = input.strain_increment[c];
-        accumulated[row + c] = input.accumulated_strain[c];
-        after[row + c] = histories[h].stresses_pa[s][c];
-        // Column c of the map: the rotated image of the c-th Voigt unit stress.
-        Vector6 unit = Vector6::Zero();
-        unit[c] = 1;
-        const Vector6 image = material::StressToVoigt(
-            rotation * material::VoigtToStress(unit) * rotation.transpose());
-        for (int r = 0; r < 6; ++r) rotations[(row + r) * 6 + c] = image[r];
-      }
-    }
-  }
-  return out;
-}
-
 // Adam's learning rate halved at 50, 75 and 90 % of the epochs.
 void HalveLearningRateAtMilestones(torch::optim::Adam& optimizer, int epoch, int epochs) {
   for (double milestone : {0.5, 0.75, 0.9}) {
@@ -229,12 +171,6 @@ void TrainingOptions::Validate(const std::string& field_prefix) const {
     throw InputError(field_prefix + "learning_rate", "must be in (0, 1)");
   }
   if (threads < 1) throw InputError(field_prefix + "threads", "must be at least 1");
-  if (rollout_steps < 1 || rollout_steps > 1000) {
-    throw InputError(field_prefix + "rollout_steps", "must be in [1, 1000]");
-  }
-  if (rollout_epochs < 0 || rollout_epochs > 100000) {
-    throw InputError(field_prefix + "rollout_epochs", "must be in [0, 100000]");
-  }
 }
 
 StressSurrogate::StressSurrogate(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -376,60 +312,6 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     const double mean_loss = loss_sum / static_cast<double>(samples);
     if (epoch == 0) figures.first_loss = mean_loss;
     figures.final_loss = mean_loss;
-  }
-  if (options.rollout_epochs > 0) {
-    std::vector<std::vector<SurrogateInput>> history_inputs;
-    for (const StrainHistory& history : histories) history_inputs.push_back(InputsOf(history));
-    const RolloutWindows windows =
-        RolloutWindowsOf(histories, history_inputs, options.rollout_steps);
-    // Each window's error relative to its own mean |sigma| (the replay error's measure, so a
-    // path at 3 kPa counts as much as one at 80), floored at a tenth of the training stresses'
-    // mean |sigma| so that a window near zero stress is not read as a large fraction of nothing.
-    const double stress_floor = 0.1 * windows.stress_after.abs().mean().item<double>();
-    const torch::Tensor window_scale =
-        windows.stress_after.abs().mean({1, 2}).clamp_min(stress_floor).unsqueeze(1);
-    const std::int64_t count = windows.start_stress.size(0);
-    // The network's d_sigma in Pa for raw inputs [d_eps, sigma_n, eps_n] (as the saved module).
-    auto stress_increment = [&](const torch::Tensor& d_eps, const torch::Tensor& sigma,
-                                const torch::Tensor& eps) {
-      torch::Tensor out = net->forward((torch::cat({d_eps, sigma, eps}, 1) - in_mean) / in_scale);
-      if (architecture.anchored) {
-        out = out - net->forward(
-                        (torch::cat({torch::zeros_like(d_eps), sigma, eps}, 1) - in_mean) / in_scale);
-      }
-      return out * out_scale + out_mean;
-    };
-    for (int epoch = 0; epoch < options.rollout_epochs; ++epoch) {
-      if (options.stop && options.stop()) throw CancelledError();
-      const torch::Tensor order = torch::randperm(count, torch::kInt64);
-      double loss_sum = 0;
-      for (std::int64_t begin = 0; begin < count; begin += options.batch_size) {
-        const torch::Tensor batch =
-            order.slice(0, begin, std::min<std::int64_t>(begin + options.batch_size, count));
-        const torch::Tensor increments = windows.strain_increments.index_select(0, batch);
-        const torch::Tensor accumulated = windows.accumulated_strain.index_select(0, batch);
-        const torch::Tensor rotations = windows.rotations.index_select(0, batch);
-        const torch::Tensor after = windows.stress_after.index_select(0, batch);
-        const torch::Tensor scale = window_scale.index_select(0, batch);
-        optimizer.zero_grad();
-        torch::Tensor sigma = windows.start_stress.index_select(0, batch);
-        torch::Tensor loss = torch::zeros({}, torch::kFloat64);
-        for (int k = 0; k < options.rollout_steps; ++k) {
-          // sigma_{n+1} = R sigma_n R^T + d_sigma(d_eps, sigma_n, eps_n), sigma_n the network's.
-          sigma = torch::bmm(rotations.select(1, k), sigma.unsqueeze(2)).squeeze(2) +
-                  stress_increment(increments.select(1, k), sigma, accumulated.select(1, k));
-          loss = loss + torch::mse_loss((sigma - after.select(1, k)) / scale,
-                                        torch::zeros_like(sigma));
-        }
-        loss = loss / options.rollout_steps;
-        loss.backward();
-        optimizer.step();
-        loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
-      }
-      const double mean_loss = loss_sum / static_cast<double>(count);
-      if (epoch == 0) figures.rollout_first_loss = mean_loss;
-      figures.rollout_final_loss = mean_loss;
-    }
   }
   std::vector<torch::Tensor> weights, biases;
   for (const torch::nn::Linear& layer : layers) {

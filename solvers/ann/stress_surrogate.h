@@ -47,14 +47,6 @@ struct TrainingOptions {
   double learning_rate = 3e-3;  // Adam; halved at 50 %, 75 % and 90 % of the epochs
   std::uint64_t seed = 1;       // weights and batch order
   int threads = 1;              // torch intra-op threads (1: bit-reproducible training)
-  // Rollout training (MLP only): after the epochs above, which feed the network the recorded
-  // stress before each step (teacher forcing), `rollout_epochs` more on windows of
-  // `rollout_steps` consecutive steps where the network is fed its own stresses, as in a replay
-  // or at an FE point, with the loss on the stresses it reaches. Teacher forcing never shows the
-  // network a stress it got slightly wrong, so a replay's errors compound; the rollout teaches it
-  // to steer back. 0 epochs: off.
-  int rollout_steps = 8;
-  int rollout_epochs = 0;
   // Asked before each epoch; true stops the training with CancelledError (a cancelled job).
   std::function<bool()> stop;
   void Validate(const std::string& field_prefix) const;
@@ -64,10 +56,6 @@ struct TrainingReport {
   std::int64_t samples = 0;
   double first_loss = 0;   // mean squared error of the standardised d_sigma, first epoch
   double final_loss = 0;   // last epoch
-  // Rollout epochs (when any): the mean squared error of the stresses reached, in units of the
-  // training stresses' standard deviations, over a window's steps, first and last epoch.
-  double rollout_first_loss = 0;
-  double rollout_final_loss = 0;
   double seconds = 0;
 };
 
