@@ -50,6 +50,7 @@ struct CommandLine {
   std::string preset = "ci";
   int steps = 50;
   int walks = 16;
+  int held_out_walks = 4;
   std::vector<double> pressures_kpa;  // empty: the recipe's
   bool unanchored = false;
   double rig_load_n = 0;  // 0: no rig paths
@@ -432,6 +433,7 @@ int Run(const CommandLine& line) {
   tiers::SurrogateRecipe recipe;
   recipe.steps = line.steps;
   recipe.walks = line.walks;
+  recipe.held_out_walks = line.held_out_walks;
   if (!line.pressures_kpa.empty()) {
     recipe.pressures_pa.clear();
     for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
@@ -538,6 +540,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--steps", line.steps, "steps per path after settling")
       ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--held-out-walks", line.held_out_walks,
+                 "random walks in the held-out set (seeds 1001, 1002, ...)")
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   app.add_option("--walks", line.walks, "random walks in the training set")
       ->check(CLI::Range(0, 10000))

@@ -48,6 +48,8 @@ SurrogateRecipe::SurrogateRecipe() {
 void SurrogateRecipe::Validate(const std::string& p) const {
   Require(steps >= 2 && steps <= 100000, p + "steps", "must lie in [2, 100000]");
   Require(walks >= 0 && walks <= 10000, p + "walks", "must lie in [0, 10000]");
+  Require(held_out_walks >= 0 && held_out_walks <= 1000, p + "held_out_walks",
+          "must lie in [0, 1000]");
   Require(pressures_pa.size() >= 2 && pressures_pa.size() <= 64, p + "pressures_pa",
           "must hold 2 to 64 pressures");
   for (double pressure : pressures_pa) {
@@ -96,11 +98,18 @@ std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe) {
   const auto between = [&](std::size_t k) { return std::sqrt(p[k] * p[k + 1]); };
   const std::size_t last = p.size() - 2;
   const double triaxial = between(last / 2), shear = between(last), reload = between(0);
-  return {{"triaxial" + Kpa(triaxial), Spec(LabPath::kTriaxial, triaxial, 0.05, n)},
-          {"simple-shear" + Kpa(shear), Spec(LabPath::kSimpleShear, shear, 0.1, n)},
-          {"unload-reload" + Kpa(reload), Spec(LabPath::kUnloadReload, reload, 0.04, n)},
-          {"random-walk" + Kpa(triaxial) + " seed 1001",
-           Spec(LabPath::kRandomWalk, triaxial, recipe.max_walk_strain, n, 1001)}};
+  std::vector<NamedLabPath> paths = {
+      {"triaxial" + Kpa(triaxial), Spec(LabPath::kTriaxial, triaxial, 0.05, n)},
+      {"simple-shear" + Kpa(shear), Spec(LabPath::kSimpleShear, shear, 0.1, n)},
+      {"unload-reload" + Kpa(reload), Spec(LabPath::kUnloadReload, reload, 0.04, n)}};
+  // The first walk at the triaxial's pressure, the next ones cycling through the others between.
+  for (int k = 0; k < recipe.held_out_walks; ++k) {
+    const double pressure = between((last / 2 + static_cast<std::size_t>(k)) % (last + 1));
+    const std::uint64_t seed = 1001 + static_cast<std::uint64_t>(k);
+    paths.push_back({"random-walk" + Kpa(pressure) + " seed " + std::to_string(seed),
+                     Spec(LabPath::kRandomWalk, pressure, recipe.max_walk_strain, n, seed)});
+  }
+  return paths;
 }
 
 std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& model,

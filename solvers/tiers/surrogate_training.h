@@ -29,6 +29,9 @@ struct NamedLabPath {
 struct SurrogateRecipe {
   int steps = 50;  // per path, after settling
   int walks = 16;
+  // Held-out random walks (seeds 1001, 1002, ...), at pressures between the training ones: the
+  // walk is the held-out path a network finds hardest, and one walk is one sample of it.
+  int held_out_walks = 4;
   // Confining pressures of the training paths, Pa: they span the stresses of an fe-de bin under a
   // wheel (its surface layer starts at FeDeOptions::min_initial_pressure_pa, 2 kPa).
   std::vector<double> pressures_pa = {2.5e3, 5e3, 10e3, 20e3, 40e3, 80e3};

@@ -97,7 +97,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(first.exit_code, 0) << first.out;
   const std::string trained = RegisteredId(first.out);
   ASSERT_FALSE(trained.empty()) << first.out;
-  EXPECT_NE(first.out.find("RVE strain paths: 0 of 24 (0 from dataset"), std::string::npos)
+  EXPECT_NE(first.out.find("RVE strain paths: 0 of 27 (0 from dataset"), std::string::npos)
       << first.out;
   EXPECT_NE(first.out.find("mlp-16x16-tanh-anchored, 3 members"), std::string::npos) << first.out;
 
@@ -105,8 +105,8 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   const CliRun second =
       Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --unanchored");
   ASSERT_EQ(second.exit_code, 0) << second.out;
-  EXPECT_NE(second.out.find("tasks 27/27  cache hits 24"), std::string::npos)
-      << "24 paths from the dataset, 3 members trained:\n" << second.out;
+  EXPECT_NE(second.out.find("tasks 30/30  cache hits 27"), std::string::npos)
+      << "27 paths from the dataset, 3 members trained:\n" << second.out;
   EXPECT_NE(second.out.find("mlp-16x16-tanh, 3 members"), std::string::npos) << second.out;
 
   // The offline trainer on the same recipe, registering into the same data directory.
@@ -138,7 +138,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << listed.out;
   const std::string dataset = match[1];
   ASSERT_TRUE(std::regex_search(
-      listed.out, match, std::regex("histories: 24 \\(20 training, 4 held out\\), ([0-9]+) steps")))
+      listed.out, match, std::regex("histories: 27 \\(20 training, 7 held out\\), ([0-9]+) steps")))
       << listed.out;
   const size_t steps = std::stoul(match[1]);
   EXPECT_NE(listed.out.find("(fe-de-1-tiny)"), std::string::npos) << listed.out;
@@ -150,14 +150,14 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_EQ(CountLines(table), steps + 1) << "a header and one row per step";
   EXPECT_EQ(table.rfind("history,step,dH_xx,", 0), 0u) << table.substr(0, 200);
   const std::string index = ReadFile(exported / (dataset + ".paths.csv"));
-  EXPECT_EQ(CountLines(index), 25u) << index;
+  EXPECT_EQ(CountLines(index), 28u) << index;
   EXPECT_NE(index.find(",rank 1,"), std::string::npos) << "paths ran on both workers:\n" << index;
   EXPECT_NE(index.find(",rank 2,"), std::string::npos) << "paths ran on both workers:\n" << index;
   const CliRun npy = Gonogo(server.endpoint(), "dataset export " + dataset + " --format npy --role "
                                                "held-out --out " + exported.string());
   ASSERT_EQ(npy.exit_code, 0) << npy.out;
   const std::string held_out_index = ReadFile(exported / (dataset + "-held-out.paths.csv"));
-  EXPECT_EQ(CountLines(held_out_index), 5u);
+  EXPECT_EQ(CountLines(held_out_index), 8u);
   size_t held_out_steps = 0;  // the index's `steps` column, summed
   std::istringstream index_lines(held_out_index);
   std::string line;
@@ -189,15 +189,15 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
                                                         " --hidden 16x16 --rig-load-n 1000 "
                                                         "--rig-points 4");
   ASSERT_EQ(with_rig.exit_code, 0) << with_rig.out;
-  EXPECT_NE(with_rig.out.find("RVE strain paths and rig paths: 24 of 30 (24 from dataset"),
+  EXPECT_NE(with_rig.out.find("RVE strain paths and rig paths: 27 of 33 (27 from dataset"),
             std::string::npos)
       << with_rig.out;
-  EXPECT_NE(with_rig.out.find("tasks 33/33  cache hits 24"), std::string::npos) << with_rig.out;
+  EXPECT_NE(with_rig.out.find("tasks 36/36  cache hits 27"), std::string::npos) << with_rig.out;
   EXPECT_NE(with_rig.out.find("; rig point 2 "), std::string::npos) << "held out:\n" << with_rig.out;
   EXPECT_EQ(with_rig.out.find("; rig point 3 "), std::string::npos) << "half as many held out:\n"
                                                                    << with_rig.out;
   const CliRun with_rig_listed = Gonogo(server.endpoint(), "dataset");
-  EXPECT_NE(with_rig_listed.out.find("histories: 30 (24 training, 6 held out)"), std::string::npos)
+  EXPECT_NE(with_rig_listed.out.find("histories: 33 (24 training, 9 held out)"), std::string::npos)
       << with_rig_listed.out;
   const CliRun rig_export = Gonogo(server.endpoint(), "dataset export " + dataset + " --out " +
                                                           (dir.path() / "export2").string());
@@ -274,7 +274,7 @@ TEST(TrainService, ACancelledTrainingStopsAndADrainedOneResumesFromItsStoredPath
     EXPECT_EQ(resumed.state(), v1::JOB_STATE_DONE) << resumed.message();
     stored_before_drain = resumed.cache_hits();
     EXPECT_GE(stored_before_drain, 4u) << "paths stored before the drain are not run again";
-    EXPECT_LT(stored_before_drain, 24u) << "the drain came mid-way";
+    EXPECT_LT(stored_before_drain, 27u) << "the drain came mid-way";
     const CliRun models = Gonogo(restarted.endpoint(), "models");
     EXPECT_NE(models.out.find("mlp-8-tanh-anchored, 3 members"), std::string::npos) << models.out;
     EXPECT_EQ(restarted.Terminate(), 0);
