@@ -51,6 +51,23 @@ bool SameBits(const TractionCurve& a, const TractionCurve& b) {
   return true;
 }
 
+// The recipe of this file's models: 40-step paths of the soil's RVE at the tiny preset's
+// numerics, `walks` random walks, 3 x MLP 64 x 64, 200 epochs.
+SurrogateRecipe TinyRecipe(int walks) {
+  SurrogateRecipe recipe;
+  recipe.steps = 40;
+  recipe.walks = walks;
+  recipe.training.epochs = 200;
+  recipe.threads = 2;
+  return recipe;
+}
+
+TrainedSurrogate TrainOnTheSoilsRve(const SurrogateRecipe& recipe) {
+  const SoilParameters soil =
+      BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters;
+  return TrainSurrogateOnRve(soil, TinyFeDeOptions(), recipe);
+}
+
 // One model and one fe-de curve for the whole suite.
 class FeAnnTierTest : public ::testing::Test {
  protected:
@@ -58,14 +75,7 @@ class FeAnnTierTest : public ::testing::Test {
     char path[] = "/tmp/gonogo_fe_ann_XXXXXX";
     ASSERT_NE(mkdtemp(path), nullptr);
     directory_ = new std::string(path);
-    SurrogateRecipe recipe;
-    recipe.steps = 40;
-    recipe.walks = 12;
-    recipe.training.epochs = 200;
-    recipe.threads = 2;
-    const SoilParameters soil =
-        BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters;
-    const TrainedSurrogate trained = TrainSurrogateOnRve(soil, TinyFeDeOptions(), recipe);
+    const TrainedSurrogate trained = TrainOnTheSoilsRve(TinyRecipe(12));
     std::cout << "  model: " << trained.samples << " samples, paths " << trained.generation_seconds
               << " s, training " << trained.training_seconds << " s; held-out errors:";
     for (const HeldOutResult& result : trained.held_out_errors) {
@@ -120,16 +130,10 @@ double FeAnnTierTest::fe_de_seconds_ = 0;
 // surface layer's pressure the packing's stress is a few kPa carried by few contacts, and the
 // error is relative to that. The test holds both.
 TEST(SurrogateOnRve, ReplaysHeldOutPathsWithinFivePercentGivenEnoughWalks) {
-  SurrogateRecipe recipe;
-  recipe.steps = 40;
-  recipe.walks = 96;
-  recipe.held_out_walks = 4;
-  recipe.training.epochs = 200;
-  recipe.threads = 2;
-  const SoilParameters soil =
-      BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters;
-  const TrainedSurrogate trained = TrainSurrogateOnRve(soil, TinyFeDeOptions(), recipe);
+  const SurrogateRecipe recipe = TinyRecipe(96);
+  const TrainedSurrogate trained = TrainOnTheSoilsRve(recipe);
   const std::vector<NamedLabPath> paths = HeldOutPaths(recipe);
+  ASSERT_EQ(recipe.held_out_walks, 4);
   ASSERT_EQ(trained.held_out_errors.size(), paths.size());
   std::cout << "  " << trained.samples << " samples, paths " << trained.generation_seconds
             << " s, training " << trained.training_seconds << " s\n";
