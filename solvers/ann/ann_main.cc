@@ -48,9 +48,10 @@ using namespace gonogo::ann;
 struct CommandLine {
   std::string soil = "seed000_sand_rve100";
   std::string preset = "ci";
-  int steps = 50;
-  int walks = 16;
-  int held_out_walks = 4;
+  // The recipe's own defaults (solvers/tiers/surrogate_training.h).
+  int steps = tiers::SurrogateRecipe().steps;
+  int walks = tiers::SurrogateRecipe().walks;
+  int held_out_walks = tiers::SurrogateRecipe().held_out_walks;
   std::vector<double> pressures_kpa;  // empty: the recipe's
   bool unanchored = false;
   double rig_load_n = 0;  // 0: no rig paths
