@@ -71,6 +71,9 @@ struct CommandLine {
   std::vector<std::string> architectures = {"64x64"};
   int members = 3;
   int epochs = 300;
+  double path_stress_weighting = 0;
+  double walk_share = 0;  // > 0: the random walks' share of the loss
+  std::uint64_t training_seed = 1;
   int threads = 2;
   std::string out;
 };
@@ -488,6 +491,25 @@ int Run(const CommandLine& line) {
   }
   Study study{entry->parameters, training_all, held_out_all, held_out_names, references,
               tiers::HistoriesHash(training_all)};
+  std::vector<double> history_weights;
+  if (line.walk_share > 0) {
+    // Walks and the rest weighed so that the walks' steps carry walk_share of the loss.
+    double walk_steps = 0, other_steps = 0;
+    for (std::size_t k = 0; k < training_all.size(); ++k) {
+      const bool walk = k < training_paths.size() &&
+                        training_paths[k].spec.path == ann::LabPath::kRandomWalk;
+      (walk ? walk_steps : other_steps) += static_cast<double>(training_all[k].steps());
+    }
+    const double walk_weight =
+        walk_steps > 0 ? line.walk_share * other_steps / ((1 - line.walk_share) * walk_steps) : 1;
+    for (std::size_t k = 0; k < training_all.size(); ++k) {
+      const bool walk = k < training_paths.size() &&
+                        training_paths[k].spec.path == ann::LabPath::kRandomWalk;
+      history_weights.push_back(walk ? walk_weight : 1.0);
+    }
+    std::printf("# the walks' %.0f steps weigh %.3g each, the other %.0f steps 1\n", walk_steps,
+                walk_weight, other_steps);
+  }
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
   for (const std::string& name : held_out_names) std::printf("%s %%,", name.c_str());
   std::printf("us_per_point_batch_1000\n");
@@ -500,6 +522,9 @@ int Run(const CommandLine& line) {
     TrainingOptions options;
     options.epochs = line.epochs;
     options.batch_size = 64;
+    options.path_stress_weighting = line.path_stress_weighting;
+    options.history_weights = history_weights;
+    options.seed = line.training_seed;
     options.learning_rate = line.tune_learning_rate;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
@@ -518,6 +543,9 @@ int Run(const CommandLine& line) {
     TrainingOptions options;
     options.epochs = line.epochs;
     options.batch_size = 64;
+    options.path_stress_weighting = line.path_stress_weighting;
+    options.history_weights = history_weights;
+    options.seed = line.training_seed;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
@@ -614,6 +642,19 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--epochs", line.epochs, "training epochs")
       ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  app.add_option("--path-stress-weighting", line.path_stress_weighting,
+                 "each training step's squared error weighed by its path's mean |sigma| to the "
+                 "power -2x: 0 every step alike, 1 relative to the path's stress (MLPs)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--walk-share", line.walk_share,
+                 "the random walks' share of the training loss (their steps weighed to give it); "
+                 "0: their share of the steps")
+      ->check(CLI::Range(0.0, 0.99))
+      ->capture_default_str();
+  app.add_option("--training-seed", line.training_seed,
+                 "the first member's seed of weights and batch order (member k: seed + k)")
       ->capture_default_str();
   app.add_option("--threads", line.threads, "OpenMP threads generating the paths")
       ->check(CLI::Range(1, 1024))

@@ -5,6 +5,7 @@
 #include <torch/script.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -55,6 +56,24 @@ void SaveModule(torch::jit::Module& module, const std::string& path) {
     throw std::runtime_error("cannot write the surrogate to " + path + ": " +
                              e.what_without_backtrace());
   }
+}
+
+// The loss weight of each step: its history's weight (TrainingOptions::history_weights) times its
+// path's mean |sigma| to the power -2 x (TrainingOptions::path_stress_weighting), scaled to
+// average 1; undefined when every step weighs alike. Paths at rest (mean |sigma| under 1 Pa) are
+// weighed as at 1 Pa.
+torch::Tensor StepWeights(const std::vector<double>& path_stress_pa,
+                          const std::vector<double>& history_weight,
+                          const TrainingOptions& options) {
+  if (options.path_stress_weighting == 0 && options.history_weights.empty()) return {};
+  torch::Tensor weights =
+      torch::empty({static_cast<std::int64_t>(path_stress_pa.size())}, torch::kFloat64);
+  double* data = weights.data_ptr<double>();
+  for (std::size_t n = 0; n < path_stress_pa.size(); ++n) {
+    data[n] = history_weight[n] *
+              std::pow(std::max(path_stress_pa[n], 1.0), -2 * options.path_stress_weighting);
+  }
+  return weights / weights.mean();
 }
 
 // Column means and standard deviations; a constant column gets scale 1 (it carries nothing).
@@ -171,6 +190,14 @@ void TrainingOptions::Validate(const std::string& field_prefix) const {
     throw InputError(field_prefix + "learning_rate", "must be in (0, 1)");
   }
   if (threads < 1) throw InputError(field_prefix + "threads", "must be at least 1");
+  if (!(path_stress_weighting >= 0 && path_stress_weighting <= 1)) {
+    throw InputError(field_prefix + "path_stress_weighting", "must be in [0, 1]");
+  }
+  for (double weight : history_weights) {
+    if (!(weight >= 0 && std::isfinite(weight))) {
+      throw InputError(field_prefix + "history_weights", "must be finite and not negative");
+    }
+  }
 }
 
 StressSurrogate::StressSurrogate(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -228,8 +255,24 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   const auto start = std::chrono::steady_clock::now();
   std::vector<SurrogateInput> inputs;
   std::vector<Vector6> targets;
-  for (const StrainHistory& history : histories) {
+  if (!options.history_weights.empty() && options.history_weights.size() != histories.size()) {
+    throw InputError("training.history_weights", "must hold one weight per history (" +
+                                                     std::to_string(histories.size()) + ")");
+  }
+  std::vector<double> path_stress_pa;  // per step: its path's mean |sigma|
+  std::vector<double> history_weight;   // per step: its history's weight
+  for (std::size_t h = 0; h < histories.size(); ++h) {
+    const StrainHistory& history = histories[h];
     const std::vector<SurrogateInput> steps = InputsOf(history);
+    double stress_sum = 0;
+    for (const Vector6& stress : history.stresses_pa) {
+      stress_sum += material::VoigtToStress(stress).norm();
+    }
+    const double mean_stress =
+        history.steps() > 0 ? stress_sum / static_cast<double>(history.steps()) : 0;
+    path_stress_pa.insert(path_stress_pa.end(), steps.size(), mean_stress);
+    history_weight.insert(history_weight.end(), steps.size(),
+                          options.history_weights.empty() ? 1.0 : options.history_weights[h]);
     for (std::size_t s = 0; s < steps.size(); ++s) {
       const Matrix3 rotation = material::HughesWinget(history.increments[s]).rotation;
       const Matrix3 before = material::VoigtToStress(steps[s].stress_pa);
@@ -265,6 +308,8 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   torch::Tensor rest = x.clone();
   rest.slice(1, 0, 6).zero_();
   const torch::Tensor xs_rest = (rest - in_mean) / in_scale;
+
+  const torch::Tensor step_weights = StepWeights(path_stress_pa, history_weight, options);
 
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
@@ -304,7 +349,12 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       optimizer.zero_grad();
       torch::Tensor predicted = net->forward(xs.index_select(0, batch));
       if (architecture.anchored) predicted = predicted - net->forward(xs_rest.index_select(0, batch));
-      const torch::Tensor loss = torch::mse_loss(predicted, ys.index_select(0, batch));
+      const torch::Tensor loss =
+          step_weights.defined()
+              ? ((predicted - ys.index_select(0, batch)).pow(2) *
+                 step_weights.index_select(0, batch).unsqueeze(1))
+                    .mean()
+              : torch::mse_loss(predicted, ys.index_select(0, batch));
       loss.backward();
       optimizer.step();
       loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));

@@ -47,6 +47,16 @@ struct TrainingOptions {
   double learning_rate = 3e-3;  // Adam; halved at 50 %, 75 % and 90 % of the epochs
   std::uint64_t seed = 1;       // weights and batch order
   int threads = 1;              // torch intra-op threads (1: bit-reproducible training)
+  // How the loss weighs the paths, in [0, 1]. Each step's squared error (of the standardised
+  // d_sigma) is multiplied by s^(-2 x), s the mean |sigma| of its path (Frobenius), the weights
+  // scaled to average 1. 0: every step alike, so a path at 80 kPa, whose increments are large,
+  // outweighs one at 2.5 kPa; 1: the error relative to the path's own stress, the scale of the
+  // held-out metric (ReplayError).
+  double path_stress_weighting = 0;
+  // Each history's own weight in the loss, in the order of the histories (multiplying the above);
+  // empty: 1 each. E.g. to give the laboratory paths the share of the loss they would have beside
+  // fewer random walks.
+  std::vector<double> history_weights;
   // Asked before each epoch; true stops the training with CancelledError (a cancelled job).
   std::function<bool()> stop;
   void Validate(const std::string& field_prefix) const;

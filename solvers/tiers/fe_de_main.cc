@@ -54,6 +54,7 @@ struct CommandLine {
   double elements_per_radius = 0, fe_time_step_s = 0, inertial_number = 0, balance_threshold = -1;
   double slip_ramp_s = 0, self_propelled_s = 0;
   int min_de_steps = 0, threads = 1;
+  unsigned packing_seed = 0;  // 0: the RVE numerics' own (1)
   int relax_steps = -1;  // -1: the preset's; 0 is a valid choice (no relaxation)
   std::string balance_csv;
   double stop_after_s = 0;  // > 0: stop the curve after this much wall time and report its pace
@@ -75,6 +76,7 @@ tiers::FeDeOptions OptionsOf(const CommandLine& line) {
   if (line.fe_time_step_s > 0) options.fe_time_step_s = line.fe_time_step_s;
   if (line.inertial_number > 0) options.numerics.max_inertial_number = line.inertial_number;
   if (line.min_de_steps > 0) options.numerics.min_steps_per_increment = line.min_de_steps;
+  if (line.packing_seed > 0) options.numerics.seed = line.packing_seed;
   if (line.relax_steps >= 0) options.numerics.relax_steps = line.relax_steps;
   if (line.balance_threshold >= 0) options.balance.threshold = line.balance_threshold;
   if (line.slip_ramp_s > 0) options.procedure.slip_ramp_s = line.slip_ramp_s;
@@ -474,6 +476,9 @@ int main(int argc, char** argv) {
   app.add_option("--relax-steps", line.relax_steps,
                  "DE steps with the cell held after each increment (0: none)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--packing-seed", line.packing_seed,
+                 "seed of the template RVE's random grain placement (0: the numerics' own, 1): "
+                 "another packing of the same soil");
   app.add_option("--inertial-number", line.inertial_number, "DE strain-rate cap")->check(finite);
   app.add_option("--balance-threshold", line.balance_threshold,
                  "migrate RVEs when max / mean - 1 of the ranks' RVE seconds exceeds it")

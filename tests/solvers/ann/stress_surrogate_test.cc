@@ -260,6 +260,54 @@ TEST(StressSurrogate, TrainingIsReproducibleAndRefusesNothingToLearn) {
   EXPECT_THROW(StressSurrogate::Train(paths, MlpArchitecture{}, options), InputError);
 }
 
+// TrainingOptions::history_weights and path_stress_weighting: the path the loss weighs more is
+// the path the network replays better, and weights that do not fit are refused by field.
+TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
+  const std::vector<StrainHistory> paths = {Path(LabPath::kTriaxial, 5e3, 0.02),
+                                            Path(LabPath::kSimpleShear, 80e3, 0.04)};
+  TrainingOptions options;
+  options.epochs = 80;
+  options.batch_size = 16;
+  const auto trained = [&](std::vector<double> weights, double path_stress_weighting) {
+    TrainingOptions weighted = options;
+    weighted.history_weights = std::move(weights);
+    weighted.path_stress_weighting = path_stress_weighting;
+    return StressSurrogate::Train(paths, MlpArchitecture{{16}}, weighted);
+  };
+  const StressSurrogate triaxial_first = trained({1, 0.01}, 0);
+  const StressSurrogate shear_first = trained({0.01, 1}, 0);
+  const StressSurrogate alike = trained({}, 0);
+  const StressSurrogate relative = trained({}, 1);
+  const double errors[4][2] = {
+      {ReplayError(triaxial_first, paths[0]), ReplayError(triaxial_first, paths[1])},
+      {ReplayError(shear_first, paths[0]), ReplayError(shear_first, paths[1])},
+      {ReplayError(alike, paths[0]), ReplayError(alike, paths[1])},
+      {ReplayError(relative, paths[0]), ReplayError(relative, paths[1])}};
+  const char* names[4] = {"triaxial weighed 100x", "shear weighed 100x", "alike",
+                          "relative to the path's stress"};
+  for (int k = 0; k < 4; ++k) {
+    std::cout << "  " << names[k] << ": triaxial 5 kPa " << 100 * errors[k][0]
+              << " %, simple shear 80 kPa " << 100 * errors[k][1] << " %\n";
+  }
+  EXPECT_LT(errors[0][0], errors[1][0]);
+  EXPECT_LT(errors[1][1], errors[0][1]);
+  // Alike, the 80 kPa path's large increments dominate the loss; relative, the 5 kPa path counts
+  // as much.
+  EXPECT_LT(errors[3][0], errors[2][0]);
+
+  const auto refused_field = [&](std::vector<double> weights, double path_stress_weighting) {
+    try {
+      trained(std::move(weights), path_stress_weighting);
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(refused_field({1}, 0), "training.history_weights");
+  EXPECT_EQ(refused_field({1, -1}, 0), "training.history_weights");
+  EXPECT_EQ(refused_field({}, 1.5), "training.path_stress_weighting");
+}
+
 // The GRU: trained on the same paths it learns (the loss falls tenfold), it steps a batch as it
 // steps each point alone, carries its hidden state per point, and Python's torch runs the saved
 // module to the same d_sigma and hidden state.
