@@ -155,6 +155,8 @@ void RunRecurrent(const CommandLine& line, const std::string& text,
   const int width = GruWidth(text);
   TrainingOptions options;
   options.epochs = line.epochs;
+  options.path_stress_weighting = line.path_stress_weighting;
+  if (line.walk_share > 0) options.history_weights.assign(training.size(), 1.0);
   TrainingReport report;
   const RecurrentStressSurrogate gru =
       RecurrentStressSurrogate::Train(training, width, options, &report);

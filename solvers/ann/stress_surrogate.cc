@@ -198,6 +198,11 @@ void TrainingOptions::Validate(const std::string& field_prefix) const {
       throw InputError(field_prefix + "history_weights", "must be finite and not negative");
     }
   }
+  if (!history_weights.empty() &&
+      std::none_of(history_weights.begin(), history_weights.end(),
+                   [](double weight) { return weight > 0; })) {
+    throw InputError(field_prefix + "history_weights", "must not all be 0 (nothing to learn)");
+  }
 }
 
 StressSurrogate::StressSurrogate(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -521,6 +526,11 @@ RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<Strai
     throw InputError("hidden_width", "must be in [1, 1024]");
   }
   options.Validate("training.");
+  if (options.path_stress_weighting != 0 || !options.history_weights.empty()) {
+    throw InputError(options.history_weights.empty() ? "training.path_stress_weighting"
+                                                     : "training.history_weights",
+                     "the recurrent surrogate weighs every step alike (the weights are for MLPs)");
+  }
   const auto start = std::chrono::steady_clock::now();
   // Histories of equal length make one batch of sequences (time, batch, feature).
   std::map<std::size_t, std::vector<std::pair<torch::Tensor, torch::Tensor>>> by_length;

@@ -305,7 +305,16 @@ TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
   };
   EXPECT_EQ(refused_field({1}, 0), "training.history_weights");
   EXPECT_EQ(refused_field({1, -1}, 0), "training.history_weights");
+  EXPECT_EQ(refused_field({0, 0}, 0), "training.history_weights");
   EXPECT_EQ(refused_field({}, 1.5), "training.path_stress_weighting");
+  TrainingOptions weighted = options;
+  weighted.path_stress_weighting = 1;
+  try {
+    RecurrentStressSurrogate::Train(paths, 8, weighted);
+    ADD_FAILURE() << "the recurrent surrogate took loss weights it does not apply";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "training.path_stress_weighting");
+  }
 }
 
 // The GRU: trained on the same paths it learns (the loss falls tenfold), it steps a batch as it
