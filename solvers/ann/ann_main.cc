@@ -149,14 +149,22 @@ int GruWidth(const std::string& text) {
   throw InputError("--architecture", "'" + text + "' is not gru and a width in [1, 1024] (gru32)");
 }
 
-void RunRecurrent(const CommandLine& line, const std::string& text,
-                  const std::vector<StrainHistory>& training,
-                  const std::vector<StrainHistory>& held_out) {
-  const int width = GruWidth(text);
+// The study's training options: epochs, seed and the loss's weights (empty: every history alike).
+TrainingOptions StudyTraining(const CommandLine& line, const std::vector<double>& history_weights) {
   TrainingOptions options;
   options.epochs = line.epochs;
+  options.seed = line.training_seed;
   options.path_stress_weighting = line.path_stress_weighting;
-  if (line.walk_share > 0) options.history_weights.assign(training.size(), 1.0);
+  options.history_weights = history_weights;
+  return options;
+}
+
+void RunRecurrent(const CommandLine& line, const std::string& text,
+                  const std::vector<StrainHistory>& training,
+                  const std::vector<StrainHistory>& held_out,
+                  const std::vector<double>& history_weights) {
+  const int width = GruWidth(text);
+  const TrainingOptions options = StudyTraining(line, history_weights);
   TrainingReport report;
   const RecurrentStressSurrogate gru =
       RecurrentStressSurrogate::Train(training, width, options, &report);
@@ -519,12 +527,8 @@ int Run(const CommandLine& line) {
     const SurrogateEnsemble& base = *from;
     const std::string base_name =
         std::filesystem::path(line.from_model_dir).lexically_normal().filename().string();
-    TrainingOptions options;
-    options.epochs = line.epochs;
+    TrainingOptions options = StudyTraining(line, history_weights);
     options.batch_size = 64;
-    options.path_stress_weighting = line.path_stress_weighting;
-    options.history_weights = history_weights;
-    options.seed = line.training_seed;
     options.learning_rate = line.tune_learning_rate;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
@@ -535,17 +539,13 @@ int Run(const CommandLine& line) {
   }
   for (const std::string& text : line.architectures) {
     if (text.rfind("gru", 0) == 0) {
-      RunRecurrent(line, text, training_all, held_out_all);
+      RunRecurrent(line, text, training_all, held_out_all, history_weights);
       continue;
     }
     MlpArchitecture architecture = ParseArchitecture(text);
     architecture.anchored = !line.unanchored;
-    TrainingOptions options;
-    options.epochs = line.epochs;
+    TrainingOptions options = StudyTraining(line, history_weights);
     options.batch_size = 64;
-    options.path_stress_weighting = line.path_stress_weighting;
-    options.history_weights = history_weights;
-    options.seed = line.training_seed;
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
