@@ -74,6 +74,7 @@ struct CommandLine {
   double path_stress_weighting = 0;
   double walk_share = 0;  // > 0: the random walks' share of the loss
   std::uint64_t training_seed = 1;
+  bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
   int threads = 2;
   std::string out;
 };
@@ -81,11 +82,11 @@ struct CommandLine {
 // The recipe's paths run on the RVE, with a progress line and each early stop named.
 std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
                                     const std::vector<tiers::NamedLabPath>& paths, int threads,
-                                    const char* label) {
-  const std::vector<StrainHistory> histories =
-      tiers::RunLabPaths(rve, paths, threads, [&](int done) {
-        std::fprintf(stderr, "\r%s paths: %d / %zu", label, done, paths.size());
-      });
+                                    const char* label, const InternalVariables& internal) {
+  const std::vector<StrainHistory> histories = tiers::RunLabPaths(
+      rve, paths, threads,
+      [&](int done) { std::fprintf(stderr, "\r%s paths: %d / %zu", label, done, paths.size()); },
+      internal);
   std::fprintf(stderr, "\n");
   for (std::size_t k = 0; k < paths.size(); ++k) {
     if (!histories[k].stopped_reason.empty()) {
@@ -455,10 +456,12 @@ int Run(const CommandLine& line) {
   recipe.Validate("");
   const std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
   const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
+  const InternalVariables internal =
+      line.record_fabric ? tiers::RveFabricVariables() : InternalVariables{};
   const std::vector<StrainHistory> training =
-      RunPaths(*rve, training_paths, line.threads, "training");
+      RunPaths(*rve, training_paths, line.threads, "training", internal);
   const std::vector<StrainHistory> held_out =
-      RunPaths(*rve, held_out_paths, line.threads, "held-out");
+      RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
   const double generation_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<StrainHistory> training_all = training;
@@ -468,8 +471,8 @@ int Run(const CommandLine& line) {
   std::map<double, FeDeReference> references;
   if (line.rig_load_n > 0) {
     const auto rig_start = std::chrono::steady_clock::now();
-    const tiers::RecordedRigRun recorded =
-        tiers::RecordRigPaths(tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n));
+    const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(
+        tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n), {}, internal);
     references[line.rig_load_n] = {recorded.run, Since(rig_start)};
     const std::vector<StrainHistory> rig_training =
         tiers::EvenlySpread(recorded.paths, line.rig_points, 0);
@@ -600,6 +603,10 @@ int main(int argc, char** argv) {
                  "recorded points in the training set (half as many others held out)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  app.add_flag("--record-fabric", line.record_fabric,
+               "the histories --out writes also record, per step, the RVE's coordination number, "
+               "solid fraction and contact fabric (fabric_xx ... fabric_xy; trace 1): for "
+               "studies of what a network might carry (solvers/ann/studies/fabric.py)");
   app.add_option("--validate-load-n", line.validate_loads_n,
                  "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
                  "fe-de");

@@ -10,6 +10,7 @@ namespace gonogo::ann {
 struct PathRecorder::Step {
   Matrix3 increment = Matrix3::Zero();
   Vector6 stress_pa = Vector6::Zero();
+  std::vector<double> internal_variables;
   std::shared_ptr<const Step> previous;
   ~Step() {  // unlinks its chain iteratively (no deep recursion on long paths)
     std::shared_ptr<const Step> next = std::move(previous);
@@ -40,8 +41,9 @@ class RecordedState : public material::MaterialState {
 
 }  // namespace
 
-PathRecorder::PathRecorder(std::shared_ptr<const material::ConstitutiveModel> inner)
-    : inner_(std::move(inner)) {
+PathRecorder::PathRecorder(std::shared_ptr<const material::ConstitutiveModel> inner,
+                           InternalVariables internal)
+    : inner_(std::move(inner)), internal_(std::move(internal)) {
   if (inner_ == nullptr) throw InputError("inner", "a model to record is required");
 }
 
@@ -84,6 +86,7 @@ std::vector<material::PointResponse> PathRecorder::Update(
     auto step = std::make_shared<Step>();
     step->increment = increments[i].displacement_gradient_increment;
     step->stress_pa = material::StressToVoigt(responses[i].stress_pa);
+    if (internal_.read) step->internal_variables = internal_.read(*responses[i].state);
     step->previous = committed.path;
     auto next = std::make_unique<RecordedState>();
     next->inner = std::move(responses[i].state);
@@ -103,12 +106,15 @@ std::vector<StrainHistory> PathRecorder::Histories() const {
   for (const auto& [point, newest] : newest_) {
     StrainHistory history;
     history.initial_stress_pa = initial_stress_pa_.at(point);
+    if (internal_.read) history.internal_variable_names = internal_.names;
     for (const Step* step = newest.get(); step != nullptr; step = step->previous.get()) {
       history.increments.push_back(step->increment);
       history.stresses_pa.push_back(step->stress_pa);
+      if (internal_.read) history.internal_variables.push_back(step->internal_variables);
     }
     std::reverse(history.increments.begin(), history.increments.end());
     std::reverse(history.stresses_pa.begin(), history.stresses_pa.end());
+    std::reverse(history.internal_variables.begin(), history.internal_variables.end());
     histories.push_back(std::move(history));
   }
   return histories;

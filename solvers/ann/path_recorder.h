@@ -11,6 +11,9 @@
 // Where the FE discards an update it asked for, the chain it left is replaced by the next update
 // of the same point (which extends the committed chain, not the discarded one). A state restored
 // from a checkpoint starts a new point: a resumed run records from where it resumed.
+//
+// With `internal` (point_driver.h), each step also records what it reads of the inner model's
+// state after the step (an RVE's coordination and fabric).
 #pragma once
 
 #include <cstdint>
@@ -20,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "solvers/ann/point_driver.h"
 #include "solvers/ann/strain_history.h"
 #include "solvers/material/constitutive.h"
 
@@ -27,7 +31,8 @@ namespace gonogo::ann {
 
 class PathRecorder : public material::ConstitutiveModel {
  public:
-  explicit PathRecorder(std::shared_ptr<const material::ConstitutiveModel> inner);
+  explicit PathRecorder(std::shared_ptr<const material::ConstitutiveModel> inner,
+                        InternalVariables internal = {});
 
   std::string Name() const override { return "recorded " + inner_->Name(); }
   std::unique_ptr<material::MaterialState> InitialState() const override;
@@ -47,6 +52,7 @@ class PathRecorder : public material::ConstitutiveModel {
   std::unique_ptr<material::MaterialState> Wrap(std::unique_ptr<material::MaterialState> inner) const;
 
   std::shared_ptr<const material::ConstitutiveModel> inner_;
+  InternalVariables internal_;
   mutable std::mutex mutex_;
   mutable std::int64_t next_point_ = 0;
   mutable std::map<std::int64_t, Matrix3> initial_stress_pa_;  // by point

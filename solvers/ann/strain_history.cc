@@ -1,6 +1,8 @@
 #include "solvers/ann/strain_history.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -178,6 +180,28 @@ StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation) {
   for (Matrix3& increment : rotated.increments) increment = turn(increment);
   for (Vector6& stress : rotated.stresses_pa) {
     stress = material::StressToVoigt(turn(material::VoigtToStress(stress)));
+  }
+  // A tensor recorded as six internal variables <name>_xx ... <name>_xy (a fabric) turns as the
+  // stress does; the others are scalars of the state and stay.
+  const std::vector<std::string>& names = history.internal_variable_names;
+  static const char* const kComponents[6] = {"_xx", "_yy", "_zz", "_yz", "_xz", "_xy"};
+  for (const std::string& name : names) {
+    if (name.size() < 3 || name.compare(name.size() - 3, 3, "_xx") != 0) continue;
+    const std::string base = name.substr(0, name.size() - 3);
+    std::array<std::size_t, 6> column{};
+    bool whole = true;
+    for (int c = 0; c < 6; ++c) {
+      const auto found = std::find(names.begin(), names.end(), base + kComponents[c]);
+      whole = whole && found != names.end();
+      if (whole) column[c] = static_cast<std::size_t>(found - names.begin());
+    }
+    if (!whole) continue;
+    for (std::vector<double>& values : rotated.internal_variables) {
+      Vector6 tensor;
+      for (int c = 0; c < 6; ++c) tensor[c] = values.at(column[c]);
+      tensor = material::StressToVoigt(turn(material::VoigtToStress(tensor)));
+      for (int c = 0; c < 6; ++c) values[column[c]] = tensor[c];
+    }
   }
   return rotated;
 }

@@ -50,8 +50,9 @@ void WriteHistoriesNpy(const std::string& path, const std::vector<StrainHistory>
 void WriteHistoriesCsv(const std::string& path, const std::vector<StrainHistory>& histories);
 
 // `history` seen in a frame turned by the rotation Q: dH' = Q dH Q^T, sigma' = Q sigma Q^T (the
-// initial stress too); internal variables kept, so they must be invariants (void ratio,
-// coordination number).
+// initial stress too). A symmetric tensor recorded as the six internal variables <name>_xx,
+// _yy, _zz, _yz, _xz, _xy (a fabric) is turned the same way; every other internal variable is
+// kept, so it must be an invariant (void ratio, coordination number).
 StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation);
 
 // The training set of an isotropic material augmented by its frame indifference: `histories`

@@ -508,6 +508,21 @@ Eigen::Matrix3d Simulation::ContactVirialNM() const {
   return virial;
 }
 
+Eigen::Matrix3d Simulation::ContactFabric() const {
+  Eigen::Matrix3d fabric = Eigen::Matrix3d::Zero();
+  int contacts = 0;
+  const std::vector<NeighborPair>& pairs = neighbors_.pairs();
+  for (std::size_t k = 0; k < pair_overlap_m_.size(); ++k) {
+    if (pair_overlap_m_[k] <= 0.0) continue;
+    const Vec3 normal = (particles_.position_m[pairs[k].i] -
+                         (particles_.position_m[pairs[k].j] + pairs[k].ShiftM(cell_.edges_m)))
+                            .normalized();
+    fabric += normal * normal.transpose();
+    ++contacts;
+  }
+  return contacts > 0 ? Eigen::Matrix3d(fabric / contacts) : fabric;
+}
+
 Eigen::Matrix<double, 6, 6> Simulation::ContactStiffnessVoigtNM() const {
   // Voigt index -> tensor indices, xx yy zz yz xz xy.
   static constexpr int kFirst[6] = {0, 1, 2, 1, 0, 0};

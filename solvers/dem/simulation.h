@@ -74,6 +74,11 @@ class Simulation {
   // tangent, both tangent directions; k_t = 0 while sliding), as the 6 x 6 matrix of
   // dsigma/deps in Voigt order xx yy zz yz xz xy with engineering shears, times V (N m).
   Eigen::Matrix<double, 6, 6> ContactStiffnessVoigtNM() const;
+  // The contacts' fabric tensor (1/N_c) sum over contacts of n (x) n, n the unit branch vector
+  // (Satake 1982): trace 1, I/3 for contact normals spread evenly over directions; its deviatoric
+  // part is the packing's anisotropy, which the stress alone does not tell. Zero when there are
+  // no contacts.
+  Eigen::Matrix3d ContactFabric() const;
 
   // The whole state (grains, cell, contacts and their history, neighbour list inputs) as bytes.
   // RestoreState on a Simulation built with the same parameters continues bit-identically.

@@ -114,14 +114,15 @@ std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe) {
 
 std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& model,
                                             const std::vector<NamedLabPath>& paths, int threads,
-                                            const std::function<void(int done)>& progress) {
+                                            const std::function<void(int done)>& progress,
+                                            const ann::InternalVariables& internal) {
   std::vector<ann::StrainHistory> histories(paths.size());
   ann::DriverOptions options;
   options.relative_tolerance = 0.02;  // a packing's stress is a sum over contacts
   int done = 0;
 #pragma omp parallel for schedule(dynamic) num_threads(threads)
   for (int k = 0; k < static_cast<int>(paths.size()); ++k) {
-    histories[k] = ann::RunLabPath(model, paths[k].spec, options);
+    histories[k] = ann::RunLabPath(model, paths[k].spec, options, internal);
 #pragma omp critical
     {
       ++done;
@@ -131,11 +132,26 @@ std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& m
   return histories;
 }
 
+ann::InternalVariables RveFabricVariables() {
+  ann::InternalVariables internal;
+  internal.names = {"coordination_number", "solid_fraction", "fabric_xx", "fabric_yy",
+                    "fabric_zz",           "fabric_yz",      "fabric_xz", "fabric_xy"};
+  internal.read = [](const material::MaterialState& state) {
+    const dem::rve::RveSnapshot snapshot =
+        static_cast<const dem::rve::RveState&>(state).rve().Snapshot();
+    const material::Vector6 fabric = material::StressToVoigt(snapshot.fabric);
+    return std::vector<double>{snapshot.coordination_number, snapshot.solid_fraction, fabric[0],
+                               fabric[1], fabric[2], fabric[3], fabric[4], fabric[5]};
+  };
+  return internal;
+}
+
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
-                              const ComputeContext& context) {
+                              const ComputeContext& context,
+                              const ann::InternalVariables& internal) {
   std::shared_ptr<const ann::PathRecorder> recorder;
   const PointStandInFactory record = [&](std::shared_ptr<const dem::rve::RveMaterial> rve) {
-    recorder = std::make_shared<const ann::PathRecorder>(rve);
+    recorder = std::make_shared<const ann::PathRecorder>(rve, internal);
     PointStandIn stand_in;
     stand_in.model = recorder;  // its states are the RVE's bytes: no translation
     return stand_in;

@@ -57,10 +57,17 @@ std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe);
 std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe);
 
 // Runs `paths` on `model` on `threads` OpenMP threads; `progress` (if set) is called with the
-// number of paths done after each.
+// number of paths done after each. `internal` (if set) is recorded at every step.
 std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& model,
                                             const std::vector<NamedLabPath>& paths, int threads,
-                                            const std::function<void(int done)>& progress = {});
+                                            const std::function<void(int done)>& progress = {},
+                                            const ann::InternalVariables& internal = {});
+
+// What a history can record of a DE RVE's state beside its stress (dem::rve::RveSnapshot):
+// coordination_number, solid_fraction and the contact fabric fabric_xx ... fabric_xy (Voigt
+// order, tensor components; trace 1). For studies of what the network might carry: the recipe's
+// histories record nothing beyond the stress, so their data hashes do not depend on it.
+ann::InternalVariables RveFabricVariables();
 
 struct HeldOutResult {
   std::string path;
@@ -88,7 +95,8 @@ struct RecordedRigRun {
   std::vector<ann::StrainHistory> paths;  // one per point of the wheel's bin
 };
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
-                              const ComputeContext& context = {});
+                              const ComputeContext& context = {},
+                              const ann::InternalVariables& internal = {});
 
 // The largest differences between two curves of the same request over their common slips: drawbar
 // pull over the wheel load W, torque over r W, sinkage over r (r = d / 2): the measures of

@@ -360,6 +360,7 @@ RveSnapshot Rve::Snapshot() const {
   snapshot.solid_fraction = solid_m3 / snapshot.volume_m3;
   snapshot.coordination_number =
       2.0 * simulation_->ContactCount() / static_cast<double>(simulation_->particles().size());
+  snapshot.fabric = simulation_->ContactFabric();
   snapshot.unbalanced_force_ratio = simulation_->UnbalancedForceRatio();
   return snapshot;
 }

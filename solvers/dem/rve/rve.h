@@ -62,6 +62,7 @@ struct RveSnapshot {
   double volume_m3 = 0.0;
   double solid_fraction = 0.0;
   double coordination_number = 0.0;  // 2 contacts / grains
+  Matrix3 fabric = Matrix3::Zero();  // Simulation::ContactFabric: trace 1, I/3 when isotropic
   double unbalanced_force_ratio = 0.0;
 };
 

@@ -2,17 +2,32 @@
 # gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of
 # the architecture, and refuses malformed architectures by name before running any path; then
 # fine-tunes that ensemble (--from) beside a new one from scratch and registers both (--register)
-# with their provenance, the fine-tuned one naming its base.
+# with their provenance, the fine-tuned one naming its base. The first run records the RVE's
+# fabric (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts.
 set -eu
 ann="$1"
 out="$2"
 rm -rf "$out"
 mkdir -p "$out"
 OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 2 \
-  --architecture 8 --epochs 2 --threads 1 --out "$out" > "$out/figures.csv" 2> "$out/progress.txt"
+  --architecture 8 --epochs 2 --threads 1 --record-fabric --out "$out" > "$out/figures.csv" \
+  2> "$out/progress.txt"
 grep -q '^mlp-8-tanh-anchored,3,2,[0-9][0-9]*,' "$out/figures.csv"
 test -s "$out/training.npy"
 test -s "$out/held_out.npy.columns.txt"
+/usr/bin/python3 - "$out" <<'PYTHON'
+import sys
+import numpy as np
+out = sys.argv[1]
+columns = open(f'{out}/training.npy.columns.txt').read().split()
+table = np.load(f'{out}/training.npy')
+assert table.shape[1] == len(columns), (table.shape, columns)
+trace = table[:, [columns.index(f'fabric_{c}') for c in ('xx', 'yy', 'zz')]].sum(axis=1)
+coordination = table[:, columns.index('coordination_number')]
+assert ((coordination >= 0) & (coordination < 12)).all(), 'a coordination number out of range'
+assert (coordination > 0).any(), 'no step with contacts'
+assert np.abs(trace - (coordination > 0)).max() < 1e-12, 'the fabric is not of trace 1'
+PYTHON
 for k in 0 1 2; do test -s "$out/mlp-8-tanh-anchored/member_$k.pt"; done
 test -s "$out/mlp-8-tanh-anchored/envelope.bin"
 for bad in 8xq 64a gruq; do

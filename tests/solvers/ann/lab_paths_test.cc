@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "solvers/ann/lab_paths.h"
+#include "solvers/ann/path_recorder.h"
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
 #include "solvers/common/soil_model.h"
@@ -276,6 +277,52 @@ std::vector<Matrix3> Drive(const material::ConstitutiveModel& model, const Strai
   return stresses;
 }
 
+// A PathRecorder answers with the model it wraps and keeps each point's increments, the stresses
+// after them and, when asked, what it reads of the wrapped state after each step: here
+// Drucker-Prager's equivalent plastic strain, which a simple shear past yield makes grow.
+TEST(PathRecorder, RecordsEachStepWithTheInternalVariablesItIsAskedFor) {
+  const material::DruckerPrager& soil = testing::Soil();
+  LabPathSpec spec;
+  spec.path = LabPath::kSimpleShear;
+  spec.pressure_pa = 20e3;
+  spec.max_strain = 0.02;
+  spec.steps = 30;
+  const StrainHistory shear = RunLabPath(soil, spec);
+  ASSERT_TRUE(shear.stopped_reason.empty()) << shear.stopped_reason;
+  const std::shared_ptr<const material::ConstitutiveModel> unowned(
+      &soil, [](const material::ConstitutiveModel*) {});
+  InternalVariables plastic_strain;
+  plastic_strain.names = {"equivalent_plastic_strain"};
+  plastic_strain.read = [](const material::MaterialState& state) {
+    return std::vector<double>{
+        static_cast<const material::DruckerPragerState&>(state).equivalent_plastic_strain()};
+  };
+  const PathRecorder recorder(unowned, plastic_strain);
+  const PathRecorder plain(unowned);
+  const std::vector<Matrix3> driven = Drive(recorder, shear);
+  EXPECT_EQ(driven, Drive(soil, shear)) << "a recorded run is the run";
+  Drive(plain, shear);
+
+  const std::vector<StrainHistory> recorded = recorder.Histories();
+  ASSERT_EQ(recorded.size(), 1u);
+  const StrainHistory& path = recorded[0];
+  ASSERT_EQ(path.steps(), shear.steps());
+  EXPECT_EQ(path.internal_variable_names, plastic_strain.names);
+  ASSERT_EQ(path.internal_variables.size(), path.steps());
+  std::unique_ptr<material::MaterialState> state = soil.InitialState();
+  for (std::size_t k = 0; k < path.steps(); ++k) {
+    EXPECT_EQ(path.increments[k], shear.increments[k]);
+    EXPECT_EQ(path.stresses_pa[k], material::StressToVoigt(driven[k]));
+    state = std::move(soil.Update({{shear.increments[k], state.get()}}, false)[0].state);
+    EXPECT_EQ(path.internal_variables[k],
+              std::vector<double>{static_cast<const material::DruckerPragerState&>(*state)
+                                      .equivalent_plastic_strain()});
+  }
+  EXPECT_GT(path.internal_variables.back()[0], 1e-3) << "the shear did not yield";
+  EXPECT_TRUE(plain.Histories().at(0).internal_variable_names.empty());
+  EXPECT_TRUE(plain.Histories().at(0).internal_variables.empty());
+}
+
 // A rotated copy is the same path in a turned frame: a quarter turn about z swaps xx and yy and
 // turns xz into yz; an isotropic model (Drucker-Prager) driven along a copy's increments answers
 // the copy's stresses, so the copies are data of the same soil; copies are seeded, counted and
@@ -300,6 +347,17 @@ TEST(StrainHistories, RotatedCopiesAreThePathsOfTheSameIsotropicSoilInTurnedFram
   EXPECT_DOUBLE_EQ(last_turned[2], last[2]);
   EXPECT_DOUBLE_EQ(last_turned[3], last[4]);  // yz' = xz
   EXPECT_NEAR(last_turned[4], 0, 1e-9 * std::abs(last[4]));
+
+  // A fabric recorded as six internal variables turns with the frame; a scalar beside it stays.
+  StrainHistory with_fabric = shear;
+  with_fabric.internal_variable_names = {"coordination_number", "fabric_xx", "fabric_yy",
+                                         "fabric_zz", "fabric_yz", "fabric_xz", "fabric_xy"};
+  with_fabric.internal_variables.assign(shear.steps(), {5.5, 0.4, 0.35, 0.25, 0.01, -0.1, 0.02});
+  const std::vector<double> fabric_turned = Rotated(with_fabric, quarter_turn).internal_variables[3];
+  const std::vector<double> expected = {5.5, 0.35, 0.4, 0.25, -0.1, -0.01, -0.02};
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_NEAR(fabric_turned[k], expected[k], 1e-15) << with_fabric.internal_variable_names[k];
+  }
 
   const std::vector<StrainHistory> copies = WithRotatedCopies({shear}, 2, 7);
   ASSERT_EQ(copies.size(), 3u);

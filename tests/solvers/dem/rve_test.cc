@@ -108,6 +108,12 @@ TEST_F(RveTest, IsotropicConsolidationReachesItsTarget) {
     EXPECT_GT(s.solid_fraction, 0.55);
     EXPECT_LT(s.solid_fraction, 0.67);
     EXPECT_GE(s.coordination_number, 4.0);  // isostatic frictionless jamming: Z = 6
+    // Isotropic consolidation leaves the contact normals spread evenly: the fabric is I/3 within
+    // the noise of a few hundred contacts (a component's mean of n_i n_j has a standard
+    // deviation of about 0.3 / sqrt(N_c) = 0.017), trace 1 and symmetric exactly.
+    EXPECT_NEAR(s.fabric.trace(), 1.0, 1e-12);
+    EXPECT_LT((s.fabric - s.fabric.transpose()).norm(), 1e-15);
+    EXPECT_LT((s.fabric - Matrix3::Identity() / 3.0).cwiseAbs().maxCoeff(), 0.07) << s.fabric;
   }
   // Frictionless consolidation reaches the isostatic coordination of 6 (O'Hern et al. 2003,
   // Phys. Rev. E 68, 011306) within rattlers; denser than with friction.
@@ -188,6 +194,12 @@ TEST_F(RveTest, SimpleShearHoldsTheNormalStressAndMobilisesFriction) {
   const double ratio = s.stress_pa(0, 2) / -s.stress_pa(2, 2);
   EXPECT_GT(ratio, 0.3);
   EXPECT_LT(ratio, std::tan(units::DegreesToRadians(60.0)));
+  // The contacts turn towards the major compression, (1, 0, -1)/sqrt 2 for a positive sigma_xz:
+  // the fabric's xz component takes the other sign, and exceeds the consolidated noise.
+  const Matrix3 consolidated = seed_law_->Snapshot().fabric;
+  EXPECT_LT(s.fabric(0, 2), -0.05) << s.fabric;
+  EXPECT_LT(std::abs(consolidated(0, 2)), std::abs(s.fabric(0, 2)));
+  EXPECT_NEAR(s.fabric.trace(), 1.0, 1e-12);
 }
 
 TEST_F(RveTest, ConstitutiveSeamLeavesCommittedStatesAndFailsCleanly) {

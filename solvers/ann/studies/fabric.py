@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Does the packing's fabric separate what random walks and a rig's points teach the network?
+
+Reads the histories `gonogo-ann --record-fabric --out DIR` wrote (training.npy with the
+laboratory paths first, then the walks, then the rig's recorded paths; held_out.npy with the
+held-out laboratory paths and walks first; every step also records the RVE's coordination number
+Z and contact fabric F, trace 1) and trains, in Python's torch, one anchored MLP 64 x 64 as
+history_variable.py does (inputs the strain increment, the stress before the step and the strain
+accumulated since the path's start; output the stress increment after the Hughes-Winget rotation)
+on
+
+  - the laboratory paths and the first 12 walks, and
+  - the laboratory paths and every walk,
+
+each carrying nothing of the fabric (history_variable.py's network), Z and the deviatoric fabric
+F - I/3, Z alone, or F - I/3 alone: what it carries is further inputs (the state before the step)
+and their increments further outputs (the fabric's after the same rotation as the stress), so that
+a point carries its fabric as it carries its stress. It prints, per model, each
+held-out path's replay error and, over the 12 most loaded rig paths (none of them trained on),
+the stress error fed the recorded stress and fabric before each step (one-step) and fed back its
+own (replay). Errors as ReplayError (solvers/ann/stress_surrogate.h): mean |sigma error| over
+mean |sigma|, Frobenius norms, in %.
+
+    python3 solvers/ann/studies/fabric.py DIR LAB_PATHS WALKS [SEED]
+
+(LAB_PATHS: 16 for the recipe's default pressures; WALKS: gonogo-ann's --walks; SEED: torch's seed
+for the initial weights and the batch order, 1 by default.) The first step of
+every path is skipped: the histories do not hold the state before it.
+"""
+import sys
+
+import numpy as np
+import torch
+
+from history_variable import BATCH, EPOCHS, HELD_OUT_PATHS, RIG_PATHS_CHECKED, kinematics, \
+    tensor, voigt
+
+FABRIC_COLUMNS = ['coordination_number', 'fabric_xx', 'fabric_yy', 'fabric_zz', 'fabric_yz',
+                  'fabric_xz', 'fabric_xy']
+# What of the fabric state a network carries: none, all of it, Z alone, the deviatoric fabric alone.
+CARRIED = {'nothing': [], 'Z and F': list(range(7)), 'Z': [0], 'F': list(range(1, 7))}
+
+
+def paths_of(table, columns):
+    """(strain increments, rotations, stresses, fabric states) per history of an .npy table;
+    a fabric state is Z followed by the deviatoric fabric (Voigt, tensor components)."""
+    where = [columns.index(name) for name in FABRIC_COLUMNS]
+    out = []
+    for h in np.unique(table[:, 0]):
+        rows = table[table[:, 0] == h]
+        steps = [kinematics(dH) for dH in rows[:, 2:11].reshape(-1, 3, 3)]
+        fabric = rows[:, where].copy()
+        fabric[:, 1:4] -= 1.0 / 3.0
+        out.append((np.array([s[0] for s in steps]), [s[1] for s in steps], rows[:, 11:17],
+                    fabric))
+    return out
+
+
+def rotated(r, stress, fabric):
+    """The stress and the fabric state turned by the step's rotation (Z stays)."""
+    turned = fabric.copy()
+    turned[1:] = voigt(r @ tensor(fabric[1:]) @ r.T)
+    return voigt(r @ tensor(stress) @ r.T), turned
+
+
+def samples(path, carried):
+    increments, rotations, stresses, fabrics = path
+    inputs, targets = [], []
+    accumulated = increments[0].copy()
+    for s in range(1, len(stresses)):
+        stress_turned, fabric_turned = rotated(rotations[s], stresses[s - 1], fabrics[s - 1])
+        x = [increments[s], stresses[s - 1], accumulated]
+        y = [stresses[s] - stress_turned]
+        if carried:
+            x.append(fabrics[s - 1][carried])
+            y.append((fabrics[s] - fabric_turned)[carried])
+        inputs.append(np.concatenate(x))
+        targets.append(np.concatenate(y))
+        accumulated = accumulated + increments[s]
+    return inputs, targets
+
+
+def train(paths, carried, seed=1):
+    """The anchored MLP: outputs N(d_eps, ...) - N(0, ...), standardised inputs and outputs; the
+    loss weighs the stress's six outputs and the fabric's seven alike, each standardised."""
+    inputs, targets = [], []
+    for path in paths:
+        x, y = samples(path, carried)
+        inputs += x
+        targets += y
+    X, Y = torch.tensor(np.array(inputs)), torch.tensor(np.array(targets))
+    x_mean, x_scale = X.mean(0), X.std(0).clamp_min(1e-30)
+    y_scale = Y.std(0).clamp_min(1e-30)
+    torch.manual_seed(seed)
+    net = torch.nn.Sequential(torch.nn.Linear(X.shape[1], 64), torch.nn.Tanh(),
+                              torch.nn.Linear(64, 64), torch.nn.Tanh(),
+                              torch.nn.Linear(64, Y.shape[1])).double()
+    optimiser = torch.optim.Adam(net.parameters(), 3e-3)
+    xs, ys = (X - x_mean) / x_scale, Y / y_scale
+    rest = X.clone()
+    rest[:, :6] = 0
+    xs_rest = (rest - x_mean) / x_scale
+    for epoch in range(EPOCHS):
+        if epoch in (EPOCHS // 2, 3 * EPOCHS // 4, 9 * EPOCHS // 10):
+            for group in optimiser.param_groups:
+                group['lr'] *= 0.5
+        order = torch.randperm(len(X))
+        for begin in range(0, len(X), BATCH):
+            batch = order[begin:begin + BATCH]
+            optimiser.zero_grad()
+            loss = ((net(xs[batch]) - net(xs_rest[batch]) - ys[batch]) ** 2).mean()
+            loss.backward()
+            optimiser.step()
+
+    def increments_of(x):
+        with torch.no_grad():
+            t = (torch.tensor(x)[None, :] - x_mean) / x_scale
+            at_rest = t.clone()
+            at_rest[0, :6] = -x_mean[:6] / x_scale[:6]
+            return ((net(t) - net(at_rest)) * y_scale).numpy()[0]
+    return increments_of
+
+
+def errors_pct(increments_of, path, carried):
+    """(one-step, replay) stress errors along a path, % of its mean |sigma|."""
+    increments, rotations, stresses, fabrics = path
+    accumulated = increments[0].copy()
+    stress, fabric = stresses[0].copy(), fabrics[0].copy()
+    one_step, replay = [], []
+    for s in range(1, len(stresses)):
+        r = rotations[s]
+        fed_stress, fed_fabric = rotated(r, stresses[s - 1], fabrics[s - 1])
+        x = [increments[s], stresses[s - 1], accumulated, fabrics[s - 1][carried]]
+        fed = fed_stress + increments_of(np.concatenate(x))[:6]
+        stress_turned, fabric_turned = rotated(r, stress, fabric)
+        x = [increments[s], stress, accumulated, fabric[carried]]
+        answer = increments_of(np.concatenate(x))
+        stress = stress_turned + answer[:6]
+        fabric = fabric_turned.copy()
+        fabric[carried] += answer[6:]
+        accumulated = accumulated + increments[s]
+        one_step.append(np.linalg.norm(tensor(fed - stresses[s])))
+        replay.append(np.linalg.norm(tensor(stress - stresses[s])))
+    size = np.mean([np.linalg.norm(tensor(x)) for x in stresses[1:]])
+    return 100 * np.mean(one_step) / size, 100 * np.mean(replay) / size
+
+
+def main():
+    if len(sys.argv) not in (4, 5):
+        sys.exit(__doc__)
+    directory, lab_count, walk_count = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+    seed = int(sys.argv[4]) if len(sys.argv) == 5 else 1
+    torch.set_num_threads(2)
+    columns = open(f'{directory}/training.npy.columns.txt').read().split()
+    if any(name not in columns for name in FABRIC_COLUMNS):
+        sys.exit('no fabric in training.npy: run gonogo-ann with --record-fabric')
+    training = paths_of(np.load(f'{directory}/training.npy'), columns)
+    held_out = paths_of(np.load(f'{directory}/held_out.npy'), columns)[:HELD_OUT_PATHS]
+    lab = training[:lab_count]
+    walks = training[lab_count:lab_count + walk_count]
+    rig = training[lab_count + walk_count:]
+    if not rig:
+        sys.exit('no rig paths in training.npy: run gonogo-ann with --rig-load-n')
+    print(f'{len(lab)} laboratory paths, {len(walks)} walks, {len(rig)} rig paths; '
+          f'{len(held_out)} held out')
+    loaded = sorted(rig, key=lambda p: -np.abs(p[2]).max())[:RIG_PATHS_CHECKED]
+    for name, paths in (('lab + 12 walks', lab + walks[:12]), (f'lab + {len(walks)} walks', lab + walks)):
+        for carried_name, carried in CARRIED.items():
+            model = train(paths, carried, seed)
+            held = [errors_pct(model, p, carried)[1] for p in held_out]
+            on_rig = [errors_pct(model, p, carried) for p in loaded]
+            print(f'{name:16s} carrying {carried_name:7s}: held-out replay '
+                  + ' / '.join(f'{e:.1f}' for e in held)
+                  + f' %; {len(loaded)} loaded rig paths: one-step '
+                  f'{np.mean([e[0] for e in on_rig]):.1f} %, replay median '
+                  f'{np.median([e[1] for e in on_rig]):.1f} %', flush=True)
+
+
+if __name__ == '__main__':
+    main()
