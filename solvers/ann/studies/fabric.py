@@ -32,8 +32,7 @@ import sys
 import numpy as np
 import torch
 
-from history_variable import BATCH, EPOCHS, HELD_OUT_PATHS, RIG_PATHS_CHECKED, kinematics, \
-    tensor, voigt
+from history_variable import HELD_OUT_PATHS, fit_paths, kinematics, study, tensor, voigt
 
 FABRIC_COLUMNS = ['coordination_number', 'fabric_xx', 'fabric_yy', 'fabric_zz', 'fabric_yz',
                   'fabric_xz', 'fabric_xy']
@@ -81,44 +80,9 @@ def samples(path, carried):
 
 
 def train(paths, carried, seed=1):
-    """The anchored MLP: outputs N(d_eps, ...) - N(0, ...), standardised inputs and outputs; the
-    loss weighs the stress's six outputs and the fabric's seven alike, each standardised."""
-    inputs, targets = [], []
-    for path in paths:
-        x, y = samples(path, carried)
-        inputs += x
-        targets += y
-    X, Y = torch.tensor(np.array(inputs)), torch.tensor(np.array(targets))
-    x_mean, x_scale = X.mean(0), X.std(0).clamp_min(1e-30)
-    y_scale = Y.std(0).clamp_min(1e-30)
-    torch.manual_seed(seed)
-    net = torch.nn.Sequential(torch.nn.Linear(X.shape[1], 64), torch.nn.Tanh(),
-                              torch.nn.Linear(64, 64), torch.nn.Tanh(),
-                              torch.nn.Linear(64, Y.shape[1])).double()
-    optimiser = torch.optim.Adam(net.parameters(), 3e-3)
-    xs, ys = (X - x_mean) / x_scale, Y / y_scale
-    rest = X.clone()
-    rest[:, :6] = 0
-    xs_rest = (rest - x_mean) / x_scale
-    for epoch in range(EPOCHS):
-        if epoch in (EPOCHS // 2, 3 * EPOCHS // 4, 9 * EPOCHS // 10):
-            for group in optimiser.param_groups:
-                group['lr'] *= 0.5
-        order = torch.randperm(len(X))
-        for begin in range(0, len(X), BATCH):
-            batch = order[begin:begin + BATCH]
-            optimiser.zero_grad()
-            loss = ((net(xs[batch]) - net(xs_rest[batch]) - ys[batch]) ** 2).mean()
-            loss.backward()
-            optimiser.step()
-
-    def increments_of(x):
-        with torch.no_grad():
-            t = (torch.tensor(x)[None, :] - x_mean) / x_scale
-            at_rest = t.clone()
-            at_rest[0, :6] = -x_mean[:6] / x_scale[:6]
-            return ((net(t) - net(at_rest)) * y_scale).numpy()[0]
-    return increments_of
+    """history_variable.py's network; the loss weighs the stress's six outputs and the carried
+    fabric's alike, each standardised."""
+    return fit_paths(paths, lambda path: samples(path, carried), seed)
 
 
 def errors_pct(increments_of, path, carried):
@@ -156,25 +120,9 @@ def main():
         sys.exit('no fabric in training.npy: run gonogo-ann with --record-fabric')
     training = paths_of(np.load(f'{directory}/training.npy'), columns)
     held_out = paths_of(np.load(f'{directory}/held_out.npy'), columns)[:HELD_OUT_PATHS]
-    lab = training[:lab_count]
-    walks = training[lab_count:lab_count + walk_count]
-    rig = training[lab_count + walk_count:]
-    if not rig:
-        sys.exit('no rig paths in training.npy: run gonogo-ann with --rig-load-n')
-    print(f'{len(lab)} laboratory paths, {len(walks)} walks, {len(rig)} rig paths; '
-          f'{len(held_out)} held out')
-    loaded = sorted(rig, key=lambda p: -np.abs(p[2]).max())[:RIG_PATHS_CHECKED]
-    for name, paths in (('lab + 12 walks', lab + walks[:12]), (f'lab + {len(walks)} walks', lab + walks)):
-        for carried_name, carried in CARRIED.items():
-            model = train(paths, carried, seed)
-            held = [errors_pct(model, p, carried)[1] for p in held_out]
-            on_rig = [errors_pct(model, p, carried) for p in loaded]
-            print(f'{name:16s} carrying {carried_name:7s}: held-out replay '
-                  + ' / '.join(f'{e:.1f}' for e in held)
-                  + f' %; {len(loaded)} loaded rig paths: one-step '
-                  f'{np.mean([e[0] for e in on_rig]):.1f} %, replay median '
-                  f'{np.median([e[1] for e in on_rig]):.1f} %', flush=True)
-
+    study(training, held_out, lab_count, walk_count,
+          lambda paths, carried: train(paths, carried, seed), errors_pct,
+          [(f'carrying {name:7s}', carried) for name, carried in CARRIED.items()])
 
 if __name__ == '__main__':
     main()

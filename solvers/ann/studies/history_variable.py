@@ -88,20 +88,16 @@ def samples(path, with_history):
     return inputs, targets
 
 
-def train(paths, with_history, seed=1):
-    """The anchored MLP: d_sigma = N(d_eps, ...) - N(0, ...), standardised inputs and outputs."""
-    inputs, targets = [], []
-    for path in paths:
-        x, y = samples(path, with_history)
-        inputs += x
-        targets += y
+def fit(inputs, targets, seed=1):
+    """The anchored MLP: d = N(d_eps, ...) - N(0, ...), standardised inputs and outputs, the strain
+    increment the first six inputs. Returns the map from one input row to its answer."""
     X, Y = torch.tensor(np.array(inputs)), torch.tensor(np.array(targets))
     x_mean, x_scale = X.mean(0), X.std(0).clamp_min(1e-30)
     y_scale = Y.std(0).clamp_min(1e-30)
     torch.manual_seed(seed)
     net = torch.nn.Sequential(torch.nn.Linear(X.shape[1], 64), torch.nn.Tanh(),
                               torch.nn.Linear(64, 64), torch.nn.Tanh(),
-                              torch.nn.Linear(64, 6)).double()
+                              torch.nn.Linear(64, Y.shape[1])).double()
     optimiser = torch.optim.Adam(net.parameters(), 3e-3)
     xs, ys = (X - x_mean) / x_scale, Y / y_scale
     rest = X.clone()
@@ -119,13 +115,27 @@ def train(paths, with_history, seed=1):
             loss.backward()
             optimiser.step()
 
-    def stress_increment(x):
+    def answer(x):
         with torch.no_grad():
             t = (torch.tensor(x)[None, :] - x_mean) / x_scale
             at_rest = t.clone()
             at_rest[0, :6] = -x_mean[:6] / x_scale[:6]
             return ((net(t) - net(at_rest)) * y_scale).numpy()[0]
-    return stress_increment
+    return answer
+
+
+def fit_paths(paths, samples_of, seed=1):
+    """fit() on every step of `paths`, samples_of(path) -> (inputs, targets)."""
+    inputs, targets = [], []
+    for path in paths:
+        x, y = samples_of(path)
+        inputs += x
+        targets += y
+    return fit(inputs, targets, seed)
+
+
+def train(paths, with_history, seed=1):
+    return fit_paths(paths, lambda path: samples(path, with_history), seed)
 
 
 def errors_pct(stress_increment, path, with_history):
@@ -157,6 +167,15 @@ def main():
     torch.set_num_threads(2)
     training = paths_of(np.load(f'{directory}/training.npy'))
     held_out = paths_of(np.load(f'{directory}/held_out.npy'))[:HELD_OUT_PATHS]
+    study(training, held_out, lab_count, walk_count, train, errors_pct,
+          [('history variable no ', False), ('history variable yes', True)])
+
+
+def study(training, held_out, lab_count, walk_count, train, errors_pct, variants):
+    """Splits the training paths (laboratory paths, walks, rig paths), trains each variant's
+    network (train(paths, option)) on the laboratory paths with the first 12 walks and with every
+    walk, and prints a row each: its held-out replays and its errors on the most loaded rig paths
+    (errors_pct(model, path, option) -> (one-step, replay))."""
     lab = training[:lab_count]
     walks = training[lab_count:lab_count + walk_count]
     rig = training[lab_count + walk_count:]
@@ -166,16 +185,15 @@ def main():
           f'{len(held_out)} held out')
     loaded = sorted(rig, key=lambda p: -np.abs(p[2]).max())[:RIG_PATHS_CHECKED]
     for name, paths in (('lab + 12 walks', lab + walks[:12]), (f'lab + {len(walks)} walks', lab + walks)):
-        for with_history in (False, True):
-            model = train(paths, with_history)
-            held = [errors_pct(model, p, with_history)[1] for p in held_out]
-            on_rig = [errors_pct(model, p, with_history) for p in loaded]
-            print(f'{name:16s} history variable {"yes" if with_history else "no "}: held-out replay '
+        for label, option in variants:
+            model = train(paths, option)
+            held = [errors_pct(model, p, option)[1] for p in held_out]
+            on_rig = [errors_pct(model, p, option) for p in loaded]
+            print(f'{name:16s} {label}: held-out replay '
                   + ' / '.join(f'{e:.1f}' for e in held)
                   + f' %; {len(loaded)} loaded rig paths: one-step '
                   f'{np.mean([e[0] for e in on_rig]):.1f} %, replay median '
                   f'{np.median([e[1] for e in on_rig]):.1f} %', flush=True)
-
 
 if __name__ == '__main__':
     main()

@@ -277,17 +277,22 @@ std::vector<Matrix3> Drive(const material::ConstitutiveModel& model, const Strai
   return stresses;
 }
 
-// A PathRecorder answers with the model it wraps and keeps each point's increments, the stresses
-// after them and, when asked, what it reads of the wrapped state after each step: here
-// Drucker-Prager's equivalent plastic strain, which a simple shear past yield makes grow.
-TEST(PathRecorder, RecordsEachStepWithTheInternalVariablesItIsAskedFor) {
-  const material::DruckerPrager& soil = testing::Soil();
+// A simple shear of `soil` at 20 kPa to gamma 0.02 in 30 steps: past Drucker-Prager's yield.
+StrainHistory SimpleShearPastYield(const material::ConstitutiveModel& soil) {
   LabPathSpec spec;
   spec.path = LabPath::kSimpleShear;
   spec.pressure_pa = 20e3;
   spec.max_strain = 0.02;
   spec.steps = 30;
-  const StrainHistory shear = RunLabPath(soil, spec);
+  return RunLabPath(soil, spec);
+}
+
+// A PathRecorder answers with the model it wraps and keeps each point's increments, the stresses
+// after them and, when asked, what it reads of the wrapped state after each step: here
+// Drucker-Prager's equivalent plastic strain, which a simple shear past yield makes grow.
+TEST(PathRecorder, RecordsEachStepWithTheInternalVariablesItIsAskedFor) {
+  const material::DruckerPrager& soil = testing::Soil();
+  const StrainHistory shear = SimpleShearPastYield(soil);
   ASSERT_TRUE(shear.stopped_reason.empty()) << shear.stopped_reason;
   const std::shared_ptr<const material::ConstitutiveModel> unowned(
       &soil, [](const material::ConstitutiveModel*) {});
@@ -329,12 +334,7 @@ TEST(PathRecorder, RecordsEachStepWithTheInternalVariablesItIsAskedFor) {
 // bounded.
 TEST(StrainHistories, RotatedCopiesAreThePathsOfTheSameIsotropicSoilInTurnedFrames) {
   const material::DruckerPrager& soil = testing::Soil();
-  LabPathSpec spec;
-  spec.path = LabPath::kSimpleShear;
-  spec.pressure_pa = 20e3;
-  spec.max_strain = 0.02;
-  spec.steps = 30;
-  const StrainHistory shear = RunLabPath(soil, spec);
+  const StrainHistory shear = SimpleShearPastYield(soil);
   ASSERT_TRUE(shear.stopped_reason.empty()) << shear.stopped_reason;
 
   Matrix3 quarter_turn;
