@@ -13,12 +13,13 @@ on
   - the laboratory paths and every walk,
 
 each carrying nothing of the fabric (history_variable.py's network), Z and the deviatoric fabric
-F - I/3, Z alone, or F - I/3 alone: what it carries is further inputs (the state before the step)
+F - I/3 (their errors weighed in the loss as the stress's, or ten times as much), Z alone, or
+F - I/3 alone: what it carries is further inputs (the state before the step)
 and their increments further outputs (the fabric's after the same rotation as the stress), so that
 a point carries its fabric as it carries its stress. It prints, per model, each
-held-out path's replay error and, over the 12 most loaded rig paths (none of them trained on),
-the stress error fed the recorded stress and fabric before each step (one-step) and fed back its
-own (replay). Errors as ReplayError (solvers/ann/stress_surrogate.h): mean |sigma error| over
+held-out path's replay error (in brackets: replayed on the recorded fabric, its own stress fed
+back) and, over the 12 most loaded rig paths (none of them trained on), the stress error fed the
+recorded stress and fabric before each step (one-step) and fed back its own (replay). Errors as ReplayError (solvers/ann/stress_surrogate.h): mean |sigma error| over
 mean |sigma|, Frobenius norms, in %.
 
     python3 solvers/ann/studies/fabric.py DIR LAB_PATHS WALKS [SEED]
@@ -36,8 +37,10 @@ from history_variable import HELD_OUT_PATHS, fit_paths, kinematics, study, tenso
 
 FABRIC_COLUMNS = ['coordination_number', 'fabric_xx', 'fabric_yy', 'fabric_zz', 'fabric_yz',
                   'fabric_xz', 'fabric_xy']
-# What of the fabric state a network carries: none, all of it, Z alone, the deviatoric fabric alone.
-CARRIED = {'nothing': [], 'Z and F': list(range(7)), 'Z': [0], 'F': list(range(1, 7))}
+# What of the fabric state a network carries (none, all of it, Z alone, the deviatoric fabric
+# alone), and the weight of the carried outputs' squared errors in the loss (the stress's: 1).
+CARRIED = {'nothing': ([], 1), 'Z and F': (list(range(7)), 1), 'Z': ([0], 1),
+           'F': (list(range(1, 7)), 1), 'Z and F, their loss x10': (list(range(7)), 10)}
 
 
 def paths_of(table, columns):
@@ -79,23 +82,30 @@ def samples(path, carried):
     return inputs, targets
 
 
-def train(paths, carried, seed=1):
-    """history_variable.py's network; the loss weighs the stress's six outputs and the carried
-    fabric's alike, each standardised."""
-    return fit_paths(paths, lambda path: samples(path, carried), seed)
+def train(paths, carried, seed=1, weight=1):
+    """history_variable.py's network; the loss weighs each carried output's (standardised)
+    squared error by `weight`, the stress's by 1."""
+    outputs = 6 + len(carried)
+    return fit_paths(paths, lambda path: samples(path, carried), seed,
+                     None if weight == 1 else [1] * 6 + [weight] * (outputs - 6))
 
 
 def errors_pct(increments_of, path, carried):
-    """(one-step, replay) stress errors along a path, % of its mean |sigma|."""
+    """(one-step, replay, replay fed the recorded fabric) stress errors along a path, % of its
+    mean |sigma|; the last tells how much of the replay's error is the carried fabric's."""
     increments, rotations, stresses, fabrics = path
     accumulated = increments[0].copy()
     stress, fabric = stresses[0].copy(), fabrics[0].copy()
-    one_step, replay = [], []
+    stress_on_recorded = stresses[0].copy()
+    one_step, replay, on_recorded = [], [], []
     for s in range(1, len(stresses)):
         r = rotations[s]
-        fed_stress, fed_fabric = rotated(r, stresses[s - 1], fabrics[s - 1])
+        fed_stress, _ = rotated(r, stresses[s - 1], fabrics[s - 1])
         x = [increments[s], stresses[s - 1], accumulated, fabrics[s - 1][carried]]
         fed = fed_stress + increments_of(np.concatenate(x))[:6]
+        turned, _ = rotated(r, stress_on_recorded, fabrics[s - 1])
+        x = [increments[s], stress_on_recorded, accumulated, fabrics[s - 1][carried]]
+        stress_on_recorded = turned + increments_of(np.concatenate(x))[:6]
         stress_turned, fabric_turned = rotated(r, stress, fabric)
         x = [increments[s], stress, accumulated, fabric[carried]]
         answer = increments_of(np.concatenate(x))
@@ -105,8 +115,9 @@ def errors_pct(increments_of, path, carried):
         accumulated = accumulated + increments[s]
         one_step.append(np.linalg.norm(tensor(fed - stresses[s])))
         replay.append(np.linalg.norm(tensor(stress - stresses[s])))
+        on_recorded.append(np.linalg.norm(tensor(stress_on_recorded - stresses[s])))
     size = np.mean([np.linalg.norm(tensor(x)) for x in stresses[1:]])
-    return 100 * np.mean(one_step) / size, 100 * np.mean(replay) / size
+    return tuple(100 * np.mean(e) / size for e in (one_step, replay, on_recorded))
 
 
 def main():
@@ -121,8 +132,9 @@ def main():
     training = paths_of(np.load(f'{directory}/training.npy'), columns)
     held_out = paths_of(np.load(f'{directory}/held_out.npy'), columns)[:HELD_OUT_PATHS]
     study(training, held_out, lab_count, walk_count,
-          lambda paths, carried: train(paths, carried, seed), errors_pct,
-          [(f'carrying {name:7s}', carried) for name, carried in CARRIED.items()])
+          lambda paths, option: train(paths, option[0], seed, option[1]),
+          lambda model, path, option: errors_pct(model, path, option[0]),
+          [(f'carrying {name:7s}', option) for name, option in CARRIED.items()])
 
 if __name__ == '__main__':
     main()

@@ -88,9 +88,10 @@ def samples(path, with_history):
     return inputs, targets
 
 
-def fit(inputs, targets, seed=1):
+def fit(inputs, targets, seed=1, output_weights=None):
     """The anchored MLP: d = N(d_eps, ...) - N(0, ...), standardised inputs and outputs, the strain
-    increment the first six inputs. Returns the map from one input row to its answer."""
+    increment the first six inputs; output_weights (one per output) weigh the squared errors.
+    Returns the map from one input row to its answer."""
     X, Y = torch.tensor(np.array(inputs)), torch.tensor(np.array(targets))
     x_mean, x_scale = X.mean(0), X.std(0).clamp_min(1e-30)
     y_scale = Y.std(0).clamp_min(1e-30)
@@ -99,6 +100,7 @@ def fit(inputs, targets, seed=1):
                               torch.nn.Linear(64, 64), torch.nn.Tanh(),
                               torch.nn.Linear(64, Y.shape[1])).double()
     optimiser = torch.optim.Adam(net.parameters(), 3e-3)
+    weights = None if output_weights is None else torch.tensor(output_weights, dtype=torch.float64)
     xs, ys = (X - x_mean) / x_scale, Y / y_scale
     rest = X.clone()
     rest[:, :6] = 0
@@ -111,7 +113,8 @@ def fit(inputs, targets, seed=1):
         for begin in range(0, len(X), BATCH):
             batch = order[begin:begin + BATCH]
             optimiser.zero_grad()
-            loss = ((net(xs[batch]) - net(xs_rest[batch]) - ys[batch]) ** 2).mean()
+            squared = (net(xs[batch]) - net(xs_rest[batch]) - ys[batch]) ** 2
+            loss = (squared if weights is None else squared * weights).mean()
             loss.backward()
             optimiser.step()
 
@@ -124,14 +127,14 @@ def fit(inputs, targets, seed=1):
     return answer
 
 
-def fit_paths(paths, samples_of, seed=1):
+def fit_paths(paths, samples_of, seed=1, output_weights=None):
     """fit() on every step of `paths`, samples_of(path) -> (inputs, targets)."""
     inputs, targets = [], []
     for path in paths:
         x, y = samples_of(path)
         inputs += x
         targets += y
-    return fit(inputs, targets, seed)
+    return fit(inputs, targets, seed, output_weights)
 
 
 def train(paths, with_history, seed=1):
@@ -175,7 +178,7 @@ def study(training, held_out, lab_count, walk_count, train, errors_pct, variants
     """Splits the training paths (laboratory paths, walks, rig paths), trains each variant's
     network (train(paths, option)) on the laboratory paths with the first 12 walks and with every
     walk, and prints a row each: its held-out replays and its errors on the most loaded rig paths
-    (errors_pct(model, path, option) -> (one-step, replay))."""
+    (errors_pct(model, path, option) -> (one-step, replay[, replay on the recorded state]))."""
     lab = training[:lab_count]
     walks = training[lab_count:lab_count + walk_count]
     rig = training[lab_count + walk_count:]
@@ -187,10 +190,12 @@ def study(training, held_out, lab_count, walk_count, train, errors_pct, variants
     for name, paths in (('lab + 12 walks', lab + walks[:12]), (f'lab + {len(walks)} walks', lab + walks)):
         for label, option in variants:
             model = train(paths, option)
-            held = [errors_pct(model, p, option)[1] for p in held_out]
+            held = [errors_pct(model, p, option)[1:] for p in held_out]
             on_rig = [errors_pct(model, p, option) for p in loaded]
+            # A third error, where errors_pct gives one: the replay fed the recorded internal state.
             print(f'{name:16s} {label}: held-out replay '
-                  + ' / '.join(f'{e:.1f}' for e in held)
+                  + ' / '.join(f'{e[0]:.1f}' + (f' ({e[1]:.1f})' if len(e) > 1 else '')
+                               for e in held)
                   + f' %; {len(loaded)} loaded rig paths: one-step '
                   f'{np.mean([e[0] for e in on_rig]):.1f} %, replay median '
                   f'{np.median([e[1] for e in on_rig]):.1f} %', flush=True)
