@@ -190,10 +190,10 @@ StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation) {
     const std::string base = name.substr(0, name.size() - 3);
     std::array<std::size_t, 6> column{};
     bool whole = true;
-    for (int c = 0; c < 6; ++c) {
+    for (int c = 0; c < 6 && whole; ++c) {
       const auto found = std::find(names.begin(), names.end(), base + kComponents[c]);
-      whole = whole && found != names.end();
-      if (whole) column[c] = static_cast<std::size_t>(found - names.begin());
+      whole = found != names.end();
+      column[c] = static_cast<std::size_t>(found - names.begin());
     }
     if (!whole) continue;
     for (std::vector<double>& values : rotated.internal_variables) {

@@ -71,13 +71,10 @@ def samples(path, carried):
     accumulated = increments[0].copy()
     for s in range(1, len(stresses)):
         stress_turned, fabric_turned = rotated(rotations[s], stresses[s - 1], fabrics[s - 1])
-        x = [increments[s], stresses[s - 1], accumulated]
-        y = [stresses[s] - stress_turned]
-        if carried:
-            x.append(fabrics[s - 1][carried])
-            y.append((fabrics[s] - fabric_turned)[carried])
-        inputs.append(np.concatenate(x))
-        targets.append(np.concatenate(y))
+        inputs.append(np.concatenate([increments[s], stresses[s - 1], accumulated,
+                                      fabrics[s - 1][carried]]))
+        targets.append(np.concatenate([stresses[s] - stress_turned,
+                                       (fabrics[s] - fabric_turned)[carried]]))
         accumulated = accumulated + increments[s]
     return inputs, targets
 
@@ -135,6 +132,7 @@ def main():
           lambda paths, option: train(paths, option[0], seed, option[1]),
           lambda model, path, option: errors_pct(model, path, option[0]),
           [(f'carrying {name:7s}', option) for name, option in CARRIED.items()])
+
 
 if __name__ == '__main__':
     main()

@@ -200,5 +200,6 @@ def study(training, held_out, lab_count, walk_count, train, errors_pct, variants
                   f'{np.mean([e[0] for e in on_rig]):.1f} %, replay median '
                   f'{np.median([e[1] for e in on_rig]):.1f} %', flush=True)
 
+
 if __name__ == '__main__':
     main()

@@ -51,6 +51,18 @@ bool SameBits(const TractionCurve& a, const TractionCurve& b) {
   return true;
 }
 
+// Each slip's drawbar pull, torque and sinkage of fe-ann beside fe-de's: the figures the README
+// quotes.
+void PrintSideBySide(const TractionCurve& ann_curve, const TractionCurve& de_curve) {
+  for (std::size_t k = 0; k < ann_curve.points.size(); ++k) {
+    const TractionPoint& ann = ann_curve.points[k];
+    const TractionPoint& de = de_curve.points[k];
+    std::cout << "  s " << ann.slip << ": D " << ann.drawbar_pull_n << " (fe-de "
+              << de.drawbar_pull_n << ") N, T " << ann.torque_nm << " (" << de.torque_nm
+              << ") N m, z " << 1e3 * ann.sinkage_m << " (" << 1e3 * de.sinkage_m << ") mm\n";
+  }
+}
+
 // The recipe of this file's models: 40-step paths of the soil's RVE at the tiny preset's
 // numerics, `walks` random walks, 3 x MLP 64 x 64, 200 epochs.
 SurrogateRecipe TinyRecipe(int walks) {
@@ -236,13 +248,7 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
             << " capped or returned onto the cone), fallbacks "
             << report.fallbacks << ", " << report.fallback_seconds
             << " s, model load " << report.model_load_seconds << " s\n";
-  for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
-    const TractionPoint& ann = report.curve.points[k];
-    const TractionPoint& de = fe_de_->curve.points[k];
-    std::cout << "  s " << ann.slip << ": D " << ann.drawbar_pull_n << " (fe-de "
-              << de.drawbar_pull_n << ") N, T " << ann.torque_nm << " (" << de.torque_nm
-              << ") N m, z " << 1e3 * ann.sinkage_m << " (" << 1e3 * de.sinkage_m << ") mm\n";
-  }
+  PrintSideBySide(report.curve, fe_de_->curve);
   const CurveDifference worst = WorstDifference(report.curve, fe_de_->curve, Request());
   const double worst_pull = worst.drawbar_pull_over_w;
   const double worst_torque = worst.torque_over_rw;
@@ -285,13 +291,7 @@ TEST_F(FeAnnTierTest, AWheelItWasNotTrainedNearIsComparedWithFeDe) {
   const double seconds = Seconds(start);
   ASSERT_EQ(fe_de.curve.points.size(), 5u) << fe_de.curve.immobile_reason;
   ASSERT_EQ(report.curve.points.size(), 5u) << report.curve.immobile_reason;
-  for (std::size_t k = 0; k < report.curve.points.size(); ++k) {
-    const TractionPoint& ann = report.curve.points[k];
-    const TractionPoint& de = fe_de.curve.points[k];
-    std::cout << "  s " << ann.slip << ": D " << ann.drawbar_pull_n << " (fe-de "
-              << de.drawbar_pull_n << ") N, T " << ann.torque_nm << " (" << de.torque_nm
-              << ") N m, z " << 1e3 * ann.sinkage_m << " (" << 1e3 * de.sinkage_m << ") mm\n";
-  }
+  PrintSideBySide(report.curve, fe_de.curve);
   const CurveDifference worst = WorstDifference(report.curve, fe_de.curve, scaled);
   std::cout << "  scaled tyre at 1,440 N: fe-ann " << seconds << " s (fe-de " << fe_de_seconds
             << " s), " << report.fallbacks << " fallbacks; worst: D "
