@@ -75,6 +75,7 @@ struct CommandLine {
   double walk_share = 0;  // > 0: the random walks' share of the loss
   std::uint64_t training_seed = 1;
   bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
+  std::vector<std::string> carried;  // internal variables the MLPs carry (implies record_fabric)
   int threads = 2;
   std::string out;
 };
@@ -120,10 +121,11 @@ MlpArchitecture ParseArchitecture(const std::string& text) {
 
 // The first `limit` training inputs: the batch an evaluation is timed on.
 std::vector<SurrogateInput> TimingBatch(const std::vector<StrainHistory>& training,
-                                        std::size_t limit) {
+                                        std::size_t limit,
+                                        const std::vector<std::string>& carried = {}) {
   std::vector<SurrogateInput> batch;
   for (const StrainHistory& history : training) {
-    for (const SurrogateInput& input : InputsOf(history)) {
+    for (const SurrogateInput& input : InputsOf(history, carried)) {
       if (batch.size() < limit) batch.push_back(input);
     }
   }
@@ -271,7 +273,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     held_out_errors.push_back(ReplayError(ensemble, history));
     std::printf("%.2f,", 100 * held_out_errors.back());
   }
-  const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000);
+  const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000, ensemble.carried_variables());
   std::printf("%.2f\n",
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
   const double ratio = ensemble.envelope().least_principal_ratio;
@@ -433,10 +435,16 @@ int Run(const CommandLine& line) {
   for (const std::string& text : line.architectures) {  // refused before any path runs
     if (text.rfind("gru", 0) == 0) {
       GruWidth(text);
+      if (!line.carried.empty()) {
+        throw InputError("--carry", "a GRU carries its hidden state, not internal variables");
+      }
     } else {
-      ParseArchitecture(text);
+      MlpArchitecture architecture = ParseArchitecture(text);
+      architecture.carried_variables = line.carried;
+      architecture.Validate("--carry.");
     }
   }
+  tiers::RveVariables(line.carried, "--carry");  // refused before any path runs
   std::optional<SurrogateEnsemble> from;  // loaded before any path runs
   if (!line.from_model_dir.empty()) from = SurrogateEnsemble::Load(line.from_model_dir);
   const tiers::FeDeOptions preset = tiers::FeDeOptions::Preset(line.preset);
@@ -456,8 +464,9 @@ int Run(const CommandLine& line) {
   recipe.Validate("");
   const std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
   const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
-  const InternalVariables internal =
-      line.record_fabric ? tiers::RveFabricVariables() : InternalVariables{};
+  const InternalVariables internal = line.record_fabric || !line.carried.empty()
+                                         ? tiers::RveFabricVariables()
+                                         : InternalVariables{};
   const std::vector<StrainHistory> training =
       RunPaths(*rve, training_paths, line.threads, "training", internal);
   const std::vector<StrainHistory> held_out =
@@ -547,6 +556,7 @@ int Run(const CommandLine& line) {
     }
     MlpArchitecture architecture = ParseArchitecture(text);
     architecture.anchored = !line.unanchored;
+    architecture.carried_variables = line.carried;
     TrainingOptions options = StudyTraining(line, history_weights);
     options.batch_size = 64;
     const auto train_start = std::chrono::steady_clock::now();
@@ -607,6 +617,11 @@ int main(int argc, char** argv) {
                "the histories --out writes also record, per step, the RVE's coordination number, "
                "solid fraction and contact fabric (fabric_xx ... fabric_xy; trace 1): for "
                "studies of what a network might carry (solvers/ann/studies/fabric.py)");
+  app.add_option("--carry", line.carried,
+                 "internal variables of the RVE the MLPs carry as further inputs and outputs "
+                 "(coordination_number, solid_fraction; stress_surrogate.h); the histories record "
+                 "them")
+      ->type_name("NAME");
   app.add_option("--validate-load-n", line.validate_loads_n,
                  "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
                  "fe-de");

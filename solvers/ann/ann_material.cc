@@ -11,7 +11,8 @@
 namespace gonogo::ann {
 namespace {
 
-constexpr char kStateTag[9] = "GNGANN02";
+constexpr char kStateTag[9] = "GNGANN03";
+constexpr char kStateTagWithoutInternalVariables[9] = "GNGANN02";  // read only
 
 std::shared_ptr<const IncrementNode> Append(std::shared_ptr<const IncrementNode> history,
                                             const Matrix3& increment) {
@@ -29,6 +30,7 @@ std::unique_ptr<AnnState> Advance(const AnnState& committed, const Matrix3& incr
   auto next = std::make_unique<AnnState>();
   next->stress_pa = stress_pa;
   next->accumulated_strain = committed.accumulated_strain + strain_increment;
+  next->internal_variables = committed.internal_variables;
   next->history = Append(committed.history, increment);
   next->flags = committed.flags;
   next->fell_back_at_step = committed.fell_back_at_step;
@@ -129,6 +131,7 @@ std::unique_ptr<material::MaterialState> AnnState::Clone() const {
   auto copy = std::make_unique<AnnState>();
   copy->stress_pa = stress_pa;
   copy->accumulated_strain = accumulated_strain;
+  copy->internal_variables = internal_variables;
   copy->history = history;
   copy->flags = flags;
   copy->fallback = fallback ? fallback->Clone() : nullptr;
@@ -142,6 +145,8 @@ std::string AnnState::Serialize() const {
   out.PutTag(kStateTag);
   out.Put(stress_pa);
   for (int c = 0; c < 6; ++c) out.Put(accumulated_strain[c]);
+  out.Put(static_cast<std::uint64_t>(internal_variables.size()));
+  for (Eigen::Index v = 0; v < internal_variables.size(); ++v) out.Put(internal_variables[v]);
   out.Put(flags);
   out.Put(fell_back_at_step);
   const std::vector<Matrix3> increments = Increments();
@@ -166,11 +171,40 @@ AnnMaterial::AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
     initial_stress_pa_ = material::StressOfState(*fallback_, *fallback_->InitialState(),
                                                  "fallback model, its initial state");
   }
+  const std::vector<std::string>& carried = ensemble_->carried_variables();
+  if (!carried.empty()) {
+    if (fallback_ == nullptr || !options_.internal_variables.read) {
+      throw InputError("internal_variables",
+                       "the model carries internal variables; a point needs the real model and a "
+                       "reader of its state to start from");
+    }
+    const std::vector<std::string>& names = options_.internal_variables.names;
+    for (const std::string& name : carried) {
+      const auto found = std::find(names.begin(), names.end(), name);
+      if (found == names.end()) {
+        throw InputError("internal_variables", "the model carries '" + name +
+                                                   "', which the reader does not read");
+      }
+      carried_columns_.push_back(static_cast<std::size_t>(found - names.begin()));
+    }
+    initial_internal_variables_ = CarriedOf(*fallback_->InitialState());
+  }
+}
+
+Eigen::VectorXd AnnMaterial::CarriedOf(const material::MaterialState& real_state) const {
+  Eigen::VectorXd carried(static_cast<Eigen::Index>(carried_columns_.size()));
+  if (carried_columns_.empty()) return carried;
+  const std::vector<double> values = options_.internal_variables.read(real_state);
+  for (std::size_t v = 0; v < carried_columns_.size(); ++v) {
+    carried[static_cast<Eigen::Index>(v)] = values.at(carried_columns_[v]);
+  }
+  return carried;
 }
 
 std::unique_ptr<material::MaterialState> AnnMaterial::InitialState() const {
   auto state = std::make_unique<AnnState>();
   state->stress_pa = initial_stress_pa_;
+  state->internal_variables = initial_internal_variables_;
   return state;
 }
 
@@ -178,9 +212,21 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
   auto state = std::make_unique<AnnState>();
   try {
     ByteReader in(bytes);
-    in.ExpectTag(kStateTag);
+    const bool without_internal = bytes.compare(0, 8, kStateTagWithoutInternalVariables) == 0;
+    in.ExpectTag(without_internal ? kStateTagWithoutInternalVariables : kStateTag);
     in.Get(state->stress_pa);
     for (int c = 0; c < 6; ++c) in.Get(state->accumulated_strain[c]);
+    std::uint64_t carried = 0;
+    if (!without_internal) in.Get(carried);
+    if (carried != carried_columns_.size()) {
+      throw InputError("state", "carries " + std::to_string(carried) +
+                                    " internal variables, the model " +
+                                    std::to_string(carried_columns_.size()));
+    }
+    state->internal_variables.resize(static_cast<Eigen::Index>(carried));
+    for (Eigen::Index v = 0; v < state->internal_variables.size(); ++v) {
+      in.Get(state->internal_variables[v]);
+    }
     in.Get(state->flags);
     in.Get(state->fell_back_at_step);
     std::uint64_t steps = 0;
@@ -229,6 +275,7 @@ std::unique_ptr<AnnState> AnnMaterial::StateFrom(const std::string& real_state_b
   auto state = std::make_unique<AnnState>();
   state->stress_pa =
       material::StressOfState(*fallback_, *real, "fallback model, a point's starting state");
+  state->internal_variables = CarriedOf(*real);
   state->origin = Intern(real_state_bytes);
   return state;
 }
@@ -289,6 +336,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     input.strain_increment = material::StrainToVoigt(split.strain_increment);
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
+    input.internal_variables = committed.internal_variables;
     on_network.push_back(i);
     inputs.push_back(input);
     kinematics.push_back(std::move(split));
@@ -323,6 +371,9 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     std::unique_ptr<AnnState> next = Advance(
         committed, increments[i].displacement_gradient_increment, inputs[k].strain_increment, stress);
     next->flags += answer.out_of_distribution ? 1 : 0;
+    if (next->internal_variables.size() > 0) {
+      next->internal_variables += answer.internal_variable_increments;
+    }
     material::PointResponse& response = responses[i];
     response.status = material::UpdateStatus::kOk;
     response.stress_pa = next->stress_pa;

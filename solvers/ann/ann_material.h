@@ -21,6 +21,11 @@
 //
 // A point may start from a state of the real model other than its fresh one (StateFrom: an RVE
 // settled at the stress of its depth in an FE bin); its fallback then replays from there.
+//
+// An ensemble that carries internal variables (SurrogateEnsemble::carried_variables, e.g. the
+// coordination number) needs them read from the real model's state a point starts from
+// (AnnMaterialOptions::internal_variables); the point then carries them, each step adding the
+// ensemble's increments.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +35,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "solvers/ann/point_driver.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/material/constitutive.h"
 
@@ -39,6 +45,9 @@ struct AnnMaterialOptions {
   bool fallback_enabled = true;
   // The stress of a fresh point when there is no fallback model to ask (Pa, tension positive).
   Matrix3 initial_stress_pa = Matrix3::Zero();
+  // Reads the real model's internal variables (tiers::RveFabricVariables for an RVE): required,
+  // with the real model, when the ensemble carries any.
+  InternalVariables internal_variables;
 };
 
 // What the points of one material did, for a run's provenance. Thread-safe.
@@ -89,6 +98,7 @@ class AnnState : public material::MaterialState {
 
   Matrix3 stress_pa = Matrix3::Zero();
   Vector6 accumulated_strain = Vector6::Zero();  // engineering shears
+  Eigen::VectorXd internal_variables;            // the ensemble's carried ones
   std::shared_ptr<const IncrementNode> history;  // dH taken, for a fallback's replay
   std::int64_t flags = 0;                        // increments the ensemble flagged
   // Set once the point has fallen back: the real model's state answers from then on.
@@ -102,7 +112,8 @@ class AnnState : public material::MaterialState {
 class AnnMaterial : public material::ConstitutiveModel {
  public:
   // `fallback` may be null only with options.fallback_enabled false (InputError("fallback", ...)
-  // otherwise).
+  // otherwise), and only for an ensemble that carries no internal variables
+  // (InputError("internal_variables", ...), as for a reader that does not read them).
   AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
               std::shared_ptr<const material::ConstitutiveModel> fallback,
               AnnMaterialOptions options = {});
@@ -127,11 +138,15 @@ class AnnMaterial : public material::ConstitutiveModel {
  private:
   material::PointResponse FallBack(const AnnState& committed, const Matrix3& increment,
                                    bool want_tangent) const;
+  // The carried internal variables of a state of the real model.
+  Eigen::VectorXd CarriedOf(const material::MaterialState& real_state) const;
 
   std::shared_ptr<const SurrogateEnsemble> ensemble_;
   std::shared_ptr<const material::ConstitutiveModel> fallback_;
   AnnMaterialOptions options_;
   Matrix3 initial_stress_pa_ = Matrix3::Zero();
+  std::vector<std::size_t> carried_columns_;  // of the carried variables, in the reader's names
+  Eigen::VectorXd initial_internal_variables_;
   // One copy of each distinct origin (the points of one depth share theirs).
   std::shared_ptr<const std::string> Intern(std::string bytes) const;
 

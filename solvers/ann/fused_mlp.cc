@@ -54,7 +54,8 @@ Eigen::MatrixXd FusedMlp::Evaluate(const Eigen::MatrixXd& inputs,
         const Eigen::VectorXd slope = 1.0 - activations[k].col(n).array().square();
         g = weights[k + 1] * (slope.asDiagonal() * g);
       }
-      (*tangents)[static_cast<std::size_t>(n)] = out_scale.asDiagonal() * g;
+      // The stress rows only: a carried internal variable's increment is an output, not a stress.
+      (*tangents)[static_cast<std::size_t>(n)] = out_scale.head(6).asDiagonal() * g.topRows(6);
     }
   }
   return y;

@@ -26,8 +26,9 @@ struct FusedMlp {
   Eigen::VectorXd in_mean, in_scale, out_mean, out_scale;
   bool anchored = true;
 
-  // inputs: 18 x N (one point per column); returns 6 x N d_sigma, Pa; with `tangents`, one 6 x 6
-  // d(d_sigma)/d(d_eps) per point.
+  // inputs: (18 + V) x N (one point per column, V carried internal variables last); returns
+  // (6 + V) x N: d_sigma (Pa), then the carried variables' increments; with `tangents`, one 6 x 6
+  // d(d_sigma)/d(d_eps) per point (the stress rows).
   Eigen::MatrixXd Evaluate(const Eigen::MatrixXd& inputs,
                            std::vector<Voigt6x6>* tangents = nullptr) const;
 };

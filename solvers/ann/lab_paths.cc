@@ -29,6 +29,7 @@ class Recorder {
       : driver_(driver), internal_(internal), history_(history) {
     history_->initial_stress_pa = driver.stress_pa();
     history_->internal_variable_names = internal.names;
+    if (internal.read) history_->initial_internal_variables = internal.read(driver.state());
   }
   bool Apply(const MixedStep& step) {
     if (!history_->stopped_reason.empty()) return false;

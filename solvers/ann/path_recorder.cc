@@ -51,11 +51,14 @@ std::unique_ptr<material::MaterialState> PathRecorder::Wrap(
     std::unique_ptr<material::MaterialState> inner) const {
   const Matrix3 start_pa =
       material::StressOfState(*inner_, *inner, "recorded model, a point's start");
+  std::vector<double> start_internal;
+  if (internal_.read) start_internal = internal_.read(*inner);
   auto state = std::make_unique<RecordedState>();
   state->inner = std::move(inner);
   std::lock_guard<std::mutex> lock(mutex_);
   state->point = next_point_++;
   initial_stress_pa_[state->point] = start_pa;
+  if (internal_.read) initial_internal_[state->point] = std::move(start_internal);
   return state;
 }
 
@@ -106,7 +109,10 @@ std::vector<StrainHistory> PathRecorder::Histories() const {
   for (const auto& [point, newest] : newest_) {
     StrainHistory history;
     history.initial_stress_pa = initial_stress_pa_.at(point);
-    if (internal_.read) history.internal_variable_names = internal_.names;
+    if (internal_.read) {
+      history.internal_variable_names = internal_.names;
+      history.initial_internal_variables = initial_internal_.at(point);
+    }
     for (const Step* step = newest.get(); step != nullptr; step = step->previous.get()) {
       history.increments.push_back(step->increment);
       history.stresses_pa.push_back(step->stress_pa);

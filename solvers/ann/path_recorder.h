@@ -56,6 +56,7 @@ class PathRecorder : public material::ConstitutiveModel {
   mutable std::mutex mutex_;
   mutable std::int64_t next_point_ = 0;
   mutable std::map<std::int64_t, Matrix3> initial_stress_pa_;  // by point
+  mutable std::map<std::int64_t, std::vector<double>> initial_internal_;  // by point
   mutable std::map<std::int64_t, std::shared_ptr<const Step>> newest_;  // by point
 };
 

@@ -15,6 +15,7 @@ namespace gonogo::ann {
 namespace {
 
 constexpr char kHistoryTag[9] = "GNGHIS01";
+constexpr char kHistoryTagWithInitialVariables[9] = "GNGHIS02";
 
 void RequireHistory(bool condition, const std::string& reason) {
   if (!condition) throw InputError("history", reason);
@@ -60,11 +61,15 @@ std::string SerializeHistory(const StrainHistory& history) {
                  "one stress per step is needed");
   RequireHistory(variables == 0 || history.internal_variables.size() == history.steps(),
                  "one set of internal variables per step is needed");
+  const bool with_initial = !history.initial_internal_variables.empty();
+  RequireHistory(!with_initial || history.initial_internal_variables.size() == variables,
+                 "the initial internal variables must be one per name");
   ByteWriter out;
-  out.PutTag(kHistoryTag);
+  out.PutTag(with_initial ? kHistoryTagWithInitialVariables : kHistoryTag);
   out.Put(history.initial_stress_pa);
   out.Put(static_cast<std::uint64_t>(variables));
   for (const std::string& name : history.internal_variable_names) out.PutBlob(name);
+  for (double value : history.initial_internal_variables) out.Put(value);
   out.PutBlob(history.stopped_reason);
   out.Put(static_cast<std::uint64_t>(history.steps()));
   for (std::size_t s = 0; s < history.steps(); ++s) {
@@ -81,7 +86,8 @@ std::string SerializeHistory(const StrainHistory& history) {
 StrainHistory ParseHistory(const std::string& bytes) {
   try {
     ByteReader in(bytes);
-    in.ExpectTag(kHistoryTag);
+    const bool with_initial = bytes.compare(0, 8, kHistoryTagWithInitialVariables) == 0;
+    in.ExpectTag(with_initial ? kHistoryTagWithInitialVariables : kHistoryTag);
     StrainHistory history;
     in.Get(history.initial_stress_pa);
     std::uint64_t variables = 0;
@@ -89,6 +95,10 @@ StrainHistory ParseHistory(const std::string& bytes) {
     RequireHistory(variables < 1000, "implausible internal-variable count");
     history.internal_variable_names.resize(variables);
     for (std::string& name : history.internal_variable_names) in.GetBlob(name);
+    if (with_initial) {
+      history.initial_internal_variables.resize(variables);
+      for (double& value : history.initial_internal_variables) in.Get(value);
+    }
     in.GetBlob(history.stopped_reason);
     std::uint64_t steps = 0;
     in.Get(steps);
@@ -196,7 +206,13 @@ StrainHistory Rotated(const StrainHistory& history, const Matrix3& rotation) {
       column[c] = static_cast<std::size_t>(found - names.begin());
     }
     if (!whole) continue;
-    for (std::vector<double>& values : rotated.internal_variables) {
+    std::vector<std::vector<double>*> states;
+    for (std::vector<double>& values : rotated.internal_variables) states.push_back(&values);
+    if (!rotated.initial_internal_variables.empty()) {
+      states.push_back(&rotated.initial_internal_variables);
+    }
+    for (std::vector<double>* state : states) {
+      std::vector<double>& values = *state;
       Vector6 tensor;
       for (int c = 0; c < 6; ++c) tensor[c] = values.at(column[c]);
       tensor = material::StressToVoigt(turn(material::VoigtToStress(tensor)));

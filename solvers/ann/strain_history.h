@@ -28,13 +28,18 @@ struct StrainHistory {
   std::vector<Matrix3> increments;                   // dH per step
   std::vector<Vector6> stresses_pa;                  // Voigt, after each step
   std::vector<std::vector<double>> internal_variables;  // per step, by name (may be empty)
+  // The internal variables of the state the path started from, by name: what a network that
+  // carries them (stress_surrogate.h) takes before the first step. Empty when not recorded.
+  std::vector<double> initial_internal_variables;
   // Why the path ended before its last step (a model failure); empty when it ran to the end.
   std::string stopped_reason;
 
   std::size_t steps() const { return increments.size(); }
 };
 
-// Compact bytes ("GNGHIS01" tag); ParseHistory throws InputError("history", ...) for a truncated,
+// Compact bytes: "GNGHIS01" when the initial internal variables are not recorded (the bytes, and so
+// the data hashes, of histories recorded before they were), "GNGHIS02" with them after the names.
+// ParseHistory reads both and throws InputError("history", ...) for a truncated,
 // foreign or inconsistent buffer.
 std::string SerializeHistory(const StrainHistory& history);
 StrainHistory ParseHistory(const std::string& bytes);

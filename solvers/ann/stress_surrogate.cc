@@ -18,12 +18,31 @@
 namespace gonogo::ann {
 namespace {
 
-constexpr int kInputs = 18;
-constexpr int kOutputs = 6;
+constexpr int kInputs = 18;  // without carried internal variables
+constexpr int kOutputs = 6;  // d_sigma; the carried variables' increments follow
 
-// The raw inputs, one row per point: [d_eps, sigma_n, eps_n] (18 columns), or without eps_n (12,
-// the recurrent surrogate's, whose hidden state stands in for it).
-torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, int columns = kInputs) {
+// Every input carries `carried` internal variables; InputError("inputs", ...) otherwise.
+void RequireCarried(const std::vector<SurrogateInput>& inputs,
+                    const std::vector<std::string>& carried) {
+  for (const SurrogateInput& input : inputs) {
+    if (input.internal_variables.size() != static_cast<Eigen::Index>(carried.size())) {
+      std::string names;
+      for (const std::string& name : carried) names += (names.empty() ? "" : ", ") + name;
+      throw InputError("inputs", "each point must carry the network's " +
+                                     std::to_string(carried.size()) + " internal variables (" +
+                                     names + "), one carries " +
+                                     std::to_string(input.internal_variables.size()));
+    }
+  }
+}
+
+// The raw inputs, one row per point: [d_eps, sigma_n, eps_n, the carried internal variables]
+// (18 + V columns), or [d_eps, sigma_n] (12, the recurrent surrogate's, whose hidden state stands
+// in for the rest).
+torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, bool recurrent = false) {
+  const int carried =
+      recurrent || inputs.empty() ? 0 : static_cast<int>(inputs.front().internal_variables.size());
+  const int columns = recurrent ? 12 : kInputs + carried;
   torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), columns},
                                  torch::kFloat64);
   double* data = x.data_ptr<double>();
@@ -31,10 +50,49 @@ torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, int columns
     for (int c = 0; c < 6; ++c) {
       data[n * columns + c] = inputs[n].strain_increment[c];
       data[n * columns + 6 + c] = inputs[n].stress_pa[c];
-      if (columns == kInputs) data[n * columns + 12 + c] = inputs[n].accumulated_strain[c];
+      if (!recurrent) data[n * columns + 12 + c] = inputs[n].accumulated_strain[c];
     }
+    for (int v = 0; v < carried; ++v) data[n * columns + kInputs + v] = inputs[n].internal_variables[v];
   }
   return x;
+}
+
+// Each carried variable's column in the history's internal variables; InputError("histories", ...)
+// when the history does not record it, or not its initial value.
+std::vector<std::size_t> CarriedColumns(const StrainHistory& history,
+                                        const std::vector<std::string>& carried) {
+  std::vector<std::size_t> columns;
+  const std::vector<std::string>& names = history.internal_variable_names;
+  for (const std::string& name : carried) {
+    const auto found = std::find(names.begin(), names.end(), name);
+    if (found == names.end()) {
+      throw InputError("histories", "a history does not record the carried internal variable '" +
+                                        name + "' (record the RVE's: gonogo-ann --record-fabric)");
+    }
+    columns.push_back(static_cast<std::size_t>(found - names.begin()));
+  }
+  if (!carried.empty() && history.initial_internal_variables.size() != names.size()) {
+    throw InputError("histories", "a history does not record its initial internal variables "
+                                  "(recorded before they were), so a network cannot carry them");
+  }
+  return columns;
+}
+
+// The carried variables of the state before step `step` (0: the path's start).
+Eigen::VectorXd CarriedBefore(const StrainHistory& history, const std::vector<std::size_t>& columns,
+                              std::size_t step) {
+  if (columns.empty()) return Eigen::VectorXd();
+  const std::vector<double>& values =
+      step == 0 ? history.initial_internal_variables : history.internal_variables[step - 1];
+  Eigen::VectorXd carried(static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t v = 0; v < columns.size(); ++v) carried[v] = values.at(columns[v]);
+  return carried;
+}
+
+std::string Joined(const std::vector<std::string>& names, const std::string& separator) {
+  std::string joined;
+  for (std::size_t k = 0; k < names.size(); ++k) joined += (k ? separator : "") + names[k];
+  return joined;
 }
 
 // Adam's learning rate halved at 50, 75 and 90 % of the epochs.
@@ -90,8 +148,9 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
                                 const std::vector<torch::Tensor>& biases, const torch::Tensor& in_mean,
                                 const torch::Tensor& in_scale, const torch::Tensor& out_mean,
                                 const torch::Tensor& out_scale, const std::string& architecture,
-                                bool anchored) {
+                                bool anchored, const std::vector<std::string>& carried) {
   torch::jit::Module module("StressSurrogate");
+  module.register_attribute("carried_variables", c10::StringType::get(), Joined(carried, ","));
   module.register_buffer("in_mean", in_mean.detach().clone());
   module.register_buffer("in_scale", in_scale.detach().clone());
   module.register_buffer("out_mean", out_mean.detach().clone());
@@ -127,6 +186,7 @@ struct StressSurrogate::Impl {
   mutable torch::jit::Module module;
   std::string architecture;
   FusedMlp fused;  // the module's weights, for evaluation (fused_mlp.h)
+  std::vector<std::string> carried;  // MlpArchitecture::carried_variables
 };
 
 namespace {
@@ -155,11 +215,17 @@ FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architectu
   fused.in_scale = VectorOf(module.attr("in_scale").toTensor());
   fused.out_mean = VectorOf(module.attr("out_mean").toTensor());
   fused.out_scale = VectorOf(module.attr("out_scale").toTensor());
-  const std::string suffix = "-anchored";
-  fused.anchored = architecture.size() > suffix.size() &&
-                   architecture.compare(architecture.size() - suffix.size(), suffix.size(),
-                                        suffix) == 0;
+  fused.anchored = architecture.find("-anchored") != std::string::npos;
   return fused;
+}
+
+// The module's carried variables (none for a module saved before networks carried any).
+std::vector<std::string> CarriedOf(const torch::jit::Module& module) {
+  std::vector<std::string> carried;
+  if (!module.hasattr("carried_variables")) return carried;
+  std::stringstream names(module.attr("carried_variables").toStringRef());
+  for (std::string name; std::getline(names, name, ',');) carried.push_back(name);
+  return carried;
 }
 
 }  // namespace
@@ -173,6 +239,27 @@ void MlpArchitecture::Validate(const std::string& field_prefix) const {
       throw InputError(field_prefix + "hidden_widths", "each layer 1 to 4096 wide");
     }
   }
+  if (carried_variables.size() > 16) {
+    throw InputError(field_prefix + "carried_variables", "at most 16");
+  }
+  for (std::size_t k = 0; k < carried_variables.size(); ++k) {
+    const std::string& name = carried_variables[k];
+    if (name.empty() || name.find_first_of(",+ ") != std::string::npos) {
+      throw InputError(field_prefix + "carried_variables",
+                       "'" + name + "' is not a recorded variable's name");
+    }
+    for (const char* component : {"_xx", "_yy", "_zz", "_yz", "_xz", "_xy"}) {
+      if (name.size() > 3 && name.compare(name.size() - 3, 3, component) == 0) {
+        throw InputError(field_prefix + "carried_variables",
+                         "'" + name + "' is a tensor's component; only invariants are carried "
+                         "(a tensor would have to turn with each step's rotation)");
+      }
+    }
+    if (std::find(carried_variables.begin(), carried_variables.begin() + k, name) !=
+        carried_variables.begin() + k) {
+      throw InputError(field_prefix + "carried_variables", "'" + name + "' twice");
+    }
+  }
 }
 
 std::string MlpArchitecture::Describe() const {
@@ -180,7 +267,9 @@ std::string MlpArchitecture::Describe() const {
   for (std::size_t k = 0; k < hidden_widths.size(); ++k) {
     name += (k ? "x" : "") + std::to_string(hidden_widths[k]);
   }
-  return name + (anchored ? "-tanh-anchored" : "-tanh");
+  name += anchored ? "-tanh-anchored" : "-tanh";
+  if (!carried_variables.empty()) name += "-carrying-" + Joined(carried_variables, "+");
+  return name;
 }
 
 void TrainingOptions::Validate(const std::string& field_prefix) const {
@@ -212,7 +301,13 @@ StressSurrogate::~StressSurrogate() = default;
 
 std::string StressSurrogate::architecture() const { return impl_->architecture; }
 
-std::vector<SurrogateInput> InputsOf(const StrainHistory& history) {
+const std::vector<std::string>& StressSurrogate::carried_variables() const {
+  return impl_->carried;
+}
+
+std::vector<SurrogateInput> InputsOf(const StrainHistory& history,
+                                     const std::vector<std::string>& carried) {
+  const std::vector<std::size_t> columns = CarriedColumns(history, carried);
   std::vector<SurrogateInput> inputs;
   inputs.reserve(history.steps());
   Vector6 stress = material::StressToVoigt(history.initial_stress_pa);
@@ -223,6 +318,7 @@ std::vector<SurrogateInput> InputsOf(const StrainHistory& history) {
     input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
     input.stress_pa = stress;
     input.accumulated_strain = accumulated;
+    input.internal_variables = CarriedBefore(history, columns, s);
     inputs.push_back(input);
     accumulated += input.strain_increment;
     stress = history.stresses_pa[s];
@@ -248,6 +344,7 @@ StressSurrogate StressSurrogate::FineTune(const StressSurrogate& base,
     architecture.hidden_widths.push_back(static_cast<int>(base.impl_->fused.weights[k].rows()));
   }
   architecture.anchored = base.impl_->fused.anchored;
+  architecture.carried_variables = base.impl_->carried;
   return TrainFrom(histories, architecture, options, report, &base);
 }
 
@@ -258,8 +355,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   architecture.Validate("architecture.");
   options.Validate("training.");
   const auto start = std::chrono::steady_clock::now();
+  const std::vector<std::string>& carried = architecture.carried_variables;
+  const int outputs = kOutputs + static_cast<int>(carried.size());
   std::vector<SurrogateInput> inputs;
-  std::vector<Vector6> targets;
+  std::vector<Eigen::VectorXd> targets;  // d_sigma, then the carried variables' increments
   if (!options.history_weights.empty() && options.history_weights.size() != histories.size()) {
     throw InputError("training.history_weights", "must hold one weight per history (" +
                                                      std::to_string(histories.size()) + ")");
@@ -268,7 +367,8 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   std::vector<double> history_weight;   // per step: its history's weight
   for (std::size_t h = 0; h < histories.size(); ++h) {
     const StrainHistory& history = histories[h];
-    const std::vector<SurrogateInput> steps = InputsOf(history);
+    const std::vector<SurrogateInput> steps = InputsOf(history, carried);
+    const std::vector<std::size_t> columns = CarriedColumns(history, carried);
     double stress_sum = 0;
     for (const Vector6& stress : history.stresses_pa) {
       stress_sum += material::VoigtToStress(stress).norm();
@@ -281,17 +381,20 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     for (std::size_t s = 0; s < steps.size(); ++s) {
       const Matrix3 rotation = material::HughesWinget(history.increments[s]).rotation;
       const Matrix3 before = material::VoigtToStress(steps[s].stress_pa);
-      targets.push_back(history.stresses_pa[s] -
-                        material::StressToVoigt(rotation * before * rotation.transpose()));
+      Eigen::VectorXd target(outputs);
+      target << history.stresses_pa[s] -
+                    material::StressToVoigt(rotation * before * rotation.transpose()),
+          CarriedBefore(history, columns, s + 1) - steps[s].internal_variables;
+      targets.push_back(std::move(target));
       inputs.push_back(steps[s]);
     }
   }
   if (inputs.empty()) throw InputError("histories", "no steps to train on");
   const torch::Tensor x = InputTensor(inputs);
-  torch::Tensor y = torch::empty({static_cast<std::int64_t>(targets.size()), kOutputs},
+  torch::Tensor y = torch::empty({static_cast<std::int64_t>(targets.size()), outputs},
                                  torch::kFloat64);
   for (std::size_t n = 0; n < targets.size(); ++n) {
-    for (int c = 0; c < kOutputs; ++c) y[n][c] = targets[n][c];
+    for (int c = 0; c < outputs; ++c) y[n][c] = targets[n][c];
   }
   if (!torch::isfinite(x).all().item<bool>() || !torch::isfinite(y).all().item<bool>()) {
     throw InputError("histories", "a step holds a value that is not finite");
@@ -301,6 +404,9 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   // Anchored, the output has no offset: d_sigma is the difference of two network answers.
   if (architecture.anchored) out_mean = torch::zeros_like(out_mean);
   if (base != nullptr) {
+    if (base->impl_->carried != carried) {
+      throw InputError("model", "the base model carries other internal variables");
+    }
     // Fine-tuning keeps the base's standardisation, which its weights were learnt in.
     const torch::jit::Module& module = base->impl_->module;
     in_mean = module.attr("in_mean").toTensor().detach().clone();
@@ -319,7 +425,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
   torch::nn::Sequential net;
-  int width = kInputs;
+  int width = kInputs + static_cast<int>(carried.size());
   std::vector<torch::nn::Linear> layers;
   for (int hidden : architecture.hidden_widths) {
     layers.push_back(torch::nn::Linear(width, hidden));
@@ -327,7 +433,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     net->push_back(torch::nn::Tanh());
     width = hidden;
   }
-  layers.push_back(torch::nn::Linear(width, kOutputs));
+  layers.push_back(torch::nn::Linear(width, outputs));
   net->push_back(layers.back());
   net->to(torch::kFloat64);
   if (base != nullptr) {  // start from the base's weights
@@ -375,8 +481,8 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   }
   auto impl = std::make_unique<Impl>(Impl{
       ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
-                   architecture.Describe(), architecture.anchored),
-      architecture.Describe(), FusedMlp{}});
+                   architecture.Describe(), architecture.anchored, carried),
+      architecture.Describe(), FusedMlp{}, carried});
   impl->fused = FusedOf(impl->module, impl->architecture);
   figures.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -384,26 +490,38 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   return StressSurrogate(std::move(impl));
 }
 
-std::vector<Vector6> StressSurrogate::StressIncrements(const std::vector<SurrogateInput>& inputs,
-                                                       std::vector<Voigt6x6>* tangents) const {
-  Eigen::MatrixXd x(kInputs, static_cast<Eigen::Index>(inputs.size()));
+std::vector<Vector6> StressSurrogate::StressIncrements(
+    const std::vector<SurrogateInput>& inputs, std::vector<Voigt6x6>* tangents,
+    std::vector<Eigen::VectorXd>* internal_increments) const {
+  RequireCarried(inputs, impl_->carried);
+  const Eigen::Index carried = static_cast<Eigen::Index>(impl_->carried.size());
+  Eigen::MatrixXd x(kInputs + carried, static_cast<Eigen::Index>(inputs.size()));
   for (std::size_t n = 0; n < inputs.size(); ++n) {
     const auto column = static_cast<Eigen::Index>(n);
     x.col(column).segment<6>(0) = inputs[n].strain_increment;
     x.col(column).segment<6>(6) = inputs[n].stress_pa;
     x.col(column).segment<6>(12) = inputs[n].accumulated_strain;
+    x.col(column).tail(carried) = inputs[n].internal_variables;
   }
   const Eigen::MatrixXd y = impl_->fused.Evaluate(x, tangents);
   std::vector<Vector6> increments(inputs.size());
+  if (internal_increments != nullptr) internal_increments->resize(inputs.size());
   for (std::size_t n = 0; n < inputs.size(); ++n) {
-    increments[n] = y.col(static_cast<Eigen::Index>(n));
+    increments[n] = y.col(static_cast<Eigen::Index>(n)).head<6>();
+    if (internal_increments != nullptr) {
+      (*internal_increments)[n] = y.col(static_cast<Eigen::Index>(n)).tail(carried);
+    }
   }
   return increments;
 }
 
 std::vector<Vector6> StressSurrogate::StressIncrementsByModule(
-    const std::vector<SurrogateInput>& inputs, std::vector<Voigt6x6>* tangents) const {
+    const std::vector<SurrogateInput>& inputs, std::vector<Voigt6x6>* tangents,
+    std::vector<Eigen::VectorXd>* internal_increments) const {
+  RequireCarried(inputs, impl_->carried);
+  const int outputs = kOutputs + static_cast<int>(impl_->carried.size());
   std::vector<Vector6> increments(inputs.size());
+  if (internal_increments != nullptr) internal_increments->assign(inputs.size(), {});
   if (inputs.empty()) {
     if (tangents != nullptr) tangents->clear();
     return increments;
@@ -434,7 +552,11 @@ std::vector<Vector6> StressSurrogate::StressIncrementsByModule(
   y = y.contiguous();
   const double* data = y.data_ptr<double>();
   for (std::size_t n = 0; n < inputs.size(); ++n) {
-    for (int c = 0; c < kOutputs; ++c) increments[n][c] = data[n * kOutputs + c];
+    for (int c = 0; c < kOutputs; ++c) increments[n][c] = data[n * outputs + c];
+    if (internal_increments != nullptr) {
+      (*internal_increments)[n] =
+          Eigen::Map<const Eigen::VectorXd>(data + n * outputs + kOutputs, outputs - kOutputs);
+    }
   }
   return increments;
 }
@@ -459,6 +581,7 @@ StressSurrogate StressSurrogate::FromStream(std::istream& in, const std::string&
     impl->architecture = impl->module.attr("architecture").toStringRef();
     impl->module.eval();
     impl->fused = FusedOf(impl->module, impl->architecture);
+    impl->carried = CarriedOf(impl->module);
   } catch (const c10::Error& e) {
     throw InputError("model", "not a gonogo stress surrogate (" + what + "): " +
                                   e.what_without_backtrace());
@@ -482,7 +605,7 @@ namespace {
 constexpr int kRecurrentInputs = 12;
 
 torch::Tensor RecurrentInputTensor(const std::vector<SurrogateInput>& inputs) {
-  return InputTensor(inputs, kRecurrentInputs);
+  return InputTensor(inputs, /*recurrent=*/true);
 }
 
 // d_sigma = sigma_{n+1} - R sigma_n R^T of every step of a history.
@@ -660,35 +783,49 @@ std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
                             const StrainHistory& history) {
   std::vector<std::vector<double>> hidden;
   return Replay(
-      [&](const SurrogateInput& input) { return surrogate.Step({input}, &hidden)[0]; }, history);
+      [&](const SurrogateInput& input) {
+        return SurrogateOutput{surrogate.Step({input}, &hidden)[0], {}};
+      },
+      history);
 }
 
-std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
-                            const StrainHistory& history,
+std::vector<Vector6> Replay(const SurrogateStepFunction& step, const StrainHistory& history,
+                            const std::vector<std::string>& carried,
                             const AdmissibleStressFunction& admissible) {
   std::vector<Vector6> stresses;
   stresses.reserve(history.steps());
   SurrogateInput input;
   input.stress_pa = material::StressToVoigt(history.initial_stress_pa);
+  input.internal_variables = CarriedBefore(history, CarriedColumns(history, carried), 0);
   for (std::size_t s = 0; s < history.steps(); ++s) {
     const material::IncrementKinematics kinematics = material::HughesWinget(history.increments[s]);
     input.strain_increment = material::StrainToVoigt(kinematics.strain_increment);
     const Matrix3 before = material::VoigtToStress(input.stress_pa);
+    const SurrogateOutput output = step(input);
     Vector6 after =
         material::StressToVoigt(kinematics.rotation * before * kinematics.rotation.transpose()) +
-        stress_increment(input);
+        output.stress_increment_pa;
     if (admissible) after = material::StressToVoigt(admissible(material::VoigtToStress(after)));
     stresses.push_back(after);
     input.accumulated_strain += input.strain_increment;
     input.stress_pa = after;
+    if (input.internal_variables.size() > 0) {
+      input.internal_variables += output.internal_variable_increments;
+    }
   }
   return stresses;
 }
 
 std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history) {
   return Replay(
-      [&](const SurrogateInput& input) { return surrogate.StressIncrements({input})[0]; },
-      history);
+      [&](const SurrogateInput& input) {
+        SurrogateOutput output;
+        std::vector<Eigen::VectorXd> internal;
+        output.stress_increment_pa = surrogate.StressIncrements({input}, nullptr, &internal)[0];
+        output.internal_variable_increments = internal[0];
+        return output;
+      },
+      history, surrogate.carried_variables());
 }
 
 double ReplayError(const std::vector<Vector6>& replayed, const StrainHistory& history) {

@@ -11,6 +11,11 @@
 //            carry it exactly.
 //   output   d_sigma, so that sigma_{n+1} = R sigma_n R^T + d_sigma (R the step's rotation: the
 //            update is objective by construction, as every model at the seam).
+// A network may also carry internal variables of the RVE's state that are invariants of the frame
+// (MlpArchitecture::carried_variables, e.g. the coordination number Z): their values before the
+// step are further inputs and their increments over the step further outputs, so that a point
+// carries them as it carries its stress. The fabric study (README) found that the packing's
+// state beyond its stress and strain is what random walks and the rig's paths disagree about.
 // Inputs and outputs are standardised (mean, standard deviation of the training set) inside the
 // module, so the saved file is the whole map from raw inputs to raw outputs.
 // The tangent d sigma_{n+1} / d eps (6 x 6, engineering shears) is the network's own derivative
@@ -23,6 +28,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "solvers/ann/strain_history.h"
 
@@ -37,8 +44,14 @@ struct MlpArchitecture {
   // laboratory step; a network whose answer at rest is a small nonzero error adds that error at
   // every one of them.
   bool anchored = true;
+  // Internal variables the network carries, by the names the histories record them under
+  // (tiers::RveFabricVariables: "coordination_number", "solid_fraction"). Invariants only: a
+  // tensor's components would have to turn with the step's rotation.
+  std::vector<std::string> carried_variables = {};
   void Validate(const std::string& field_prefix) const;
-  std::string Describe() const;  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored)
+  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-carrying-" and the carried
+  // variables joined by "+" when there are any.
+  std::string Describe() const;
 };
 
 struct TrainingOptions {
@@ -74,6 +87,8 @@ struct SurrogateInput {
   Vector6 strain_increment = Vector6::Zero();  // engineering shears
   Vector6 stress_pa = Vector6::Zero();          // before the step
   Vector6 accumulated_strain = Vector6::Zero();  // since the path's start, engineering shears
+  // The carried internal variables before the step, in the network's order (empty: none).
+  Eigen::VectorXd internal_variables;
 };
 
 class StressSurrogate {
@@ -96,17 +111,24 @@ class StressSurrogate {
                                   const std::vector<StrainHistory>& histories,
                                   const TrainingOptions& options, TrainingReport* report = nullptr);
 
-  // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point. By the
-  // fused Eigen kernel (fused_mlp.h) on the module's weights.
+  // d_sigma for each input, batched; with `tangents`, also d(d_sigma)/d(d_eps) per point; with
+  // `internal_increments`, the carried internal variables' increments per point. By the fused
+  // Eigen kernel (fused_mlp.h) on the module's weights. Throws InputError("inputs", ...) for an
+  // input that does not carry the network's internal variables.
   std::vector<Vector6> StressIncrements(const std::vector<SurrogateInput>& inputs,
-                                        std::vector<Voigt6x6>* tangents = nullptr) const;
+                                        std::vector<Voigt6x6>* tangents = nullptr,
+                                        std::vector<Eigen::VectorXd>* internal_increments =
+                                            nullptr) const;
   // The same by the TorchScript module itself (its forward, and autograd for the tangent): what
   // the fused kernel is checked against, and what Python's torch runs.
   std::vector<Vector6> StressIncrementsByModule(const std::vector<SurrogateInput>& inputs,
-                                                std::vector<Voigt6x6>* tangents = nullptr) const;
+                                                std::vector<Voigt6x6>* tangents = nullptr,
+                                                std::vector<Eigen::VectorXd>*
+                                                    internal_increments = nullptr) const;
 
-  // TorchScript (torch.jit.load in Python: forward takes an (N, 18) float64 tensor of the inputs
-  // above and gives (N, 6) d_sigma). Load throws InputError("model", ...) for a file that is not
+  // TorchScript (torch.jit.load in Python: forward takes an (N, 18 + V) float64 tensor of the
+  // inputs above, V carried variables last, and gives (N, 6 + V): d_sigma, then the carried
+  // variables' increments; the module's attribute carried_variables names them, comma-separated). Load throws InputError("model", ...) for a file that is not
   // such a module.
   void Save(const std::string& path) const;
   static StressSurrogate Load(const std::string& path);
@@ -115,6 +137,7 @@ class StressSurrogate {
   static StressSurrogate FromBytes(const std::string& bytes);
 
   std::string architecture() const;
+  const std::vector<std::string>& carried_variables() const;
 
  private:
   struct Impl;
@@ -164,16 +187,26 @@ class RecurrentStressSurrogate {
 std::vector<Vector6> Replay(const RecurrentStressSurrogate& surrogate,
                             const StrainHistory& history);
 
-// The inputs a history gives, step by step, with the true stresses (for training and checks).
-std::vector<SurrogateInput> InputsOf(const StrainHistory& history);
+// The inputs a history gives, step by step, with the true stresses (for training and checks), and
+// the `carried` internal variables recorded before each step. Throws InputError("histories", ...)
+// for a history that does not record one of them, or not its initial value.
+std::vector<SurrogateInput> InputsOf(const StrainHistory& history,
+                                     const std::vector<std::string>& carried = {});
 
-// A surrogate (or an ensemble's mean) run along a history's increments from its initial stress,
-// feeding back its own stresses (as it runs in an FE point): the predicted stress after each step,
-// each passed through `admissible` when given (SurrogateEnsemble::Admissible).
-using StressIncrementFunction = std::function<Vector6(const SurrogateInput&)>;
+// A surrogate's answer to one step: d_sigma and the carried internal variables' increments.
+struct SurrogateOutput {
+  Vector6 stress_increment_pa = Vector6::Zero();
+  Eigen::VectorXd internal_variable_increments;
+};
+
+// A surrogate (or an ensemble's mean) run along a history's increments from its initial stress
+// and its initial `carried` internal variables, feeding back its own stresses and internal
+// variables (as it runs in an FE point): the predicted stress after each step, each passed through
+// `admissible` when given (SurrogateEnsemble::Admissible).
+using SurrogateStepFunction = std::function<SurrogateOutput(const SurrogateInput&)>;
 using AdmissibleStressFunction = std::function<Matrix3(const Matrix3&)>;
-std::vector<Vector6> Replay(const StressIncrementFunction& stress_increment,
-                            const StrainHistory& history,
+std::vector<Vector6> Replay(const SurrogateStepFunction& step, const StrainHistory& history,
+                            const std::vector<std::string>& carried = {},
                             const AdmissibleStressFunction& admissible = nullptr);
 std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistory& history);
 

@@ -16,14 +16,15 @@
 namespace gonogo::ann {
 namespace {
 
-constexpr int kInputs = 18;
+constexpr int kInputs = 18;  // without carried internal variables
 constexpr char kEnvelopeTag[9] = "GNGENV03";
 constexpr char kEnvelopeTagWithoutCone[9] = "GNGENV02";  // read only: cap, no cone
 constexpr char kEnvelopeTagWithoutCap[9] = "GNGENV01";   // read only: neither
 
 Eigen::VectorXd Raw(const SurrogateInput& input) {
-  Eigen::VectorXd x(kInputs);
-  x << input.strain_increment, input.stress_pa, input.accumulated_strain;
+  Eigen::VectorXd x(kInputs + input.internal_variables.size());
+  x << input.strain_increment, input.stress_pa, input.accumulated_strain,
+      input.internal_variables;
   return x;
 }
 
@@ -37,18 +38,26 @@ void PutVector(ByteWriter& out, const Eigen::VectorXd& values) {
   for (Eigen::Index k = 0; k < values.size(); ++k) out.Put(values[k]);
 }
 
+// A vector of the envelope's inputs: 18, and up to 16 carried internal variables.
 Eigen::VectorXd GetVector(ByteReader& in) {
   std::uint64_t size = 0;
   in.Get(size);
-  if (size != kInputs) throw InputError("model", "envelope of another input size");
-  Eigen::VectorXd values(kInputs);
-  for (int k = 0; k < kInputs; ++k) in.Get(values[k]);
+  if (size < kInputs || size > kInputs + 16) {
+    throw InputError("model", "envelope of another input size");
+  }
+  Eigen::VectorXd values(static_cast<Eigen::Index>(size));
+  for (Eigen::Index k = 0; k < values.size(); ++k) in.Get(values[k]);
   return values;
 }
 
 }  // namespace
 
 double InputEnvelope::Distance(const SurrogateInput& input) const {
+  if (kInputs + input.internal_variables.size() != offset.size()) {
+    throw InputError("inputs", "a point carries " + std::to_string(input.internal_variables.size()) +
+                                   " internal variables, the envelope " +
+                                   std::to_string(offset.size() - kInputs));
+  }
   const Eigen::VectorXd z = (Raw(input) - offset).cwiseQuotient(scale) - mean;
   return std::sqrt(std::max(0.0, z.dot(inverse_covariance * z)));
 }
@@ -58,13 +67,20 @@ InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs) {
     throw InputError("histories", "an envelope needs two training steps at least");
   }
   const Eigen::Index n = static_cast<Eigen::Index>(training_inputs.size());
-  Eigen::MatrixXd raw(n, kInputs);
-  for (Eigen::Index k = 0; k < n; ++k) raw.row(k) = Raw(training_inputs[k]).transpose();
+  const Eigen::Index columns = Raw(training_inputs.front()).size();
+  Eigen::MatrixXd raw(n, columns);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::VectorXd x = Raw(training_inputs[k]);
+    if (x.size() != columns) {
+      throw InputError("histories", "the training inputs carry different internal variables");
+    }
+    raw.row(k) = x.transpose();
+  }
   InputEnvelope envelope;
   envelope.offset = raw.colwise().mean().transpose();
   const Eigen::MatrixXd centred = raw.rowwise() - envelope.offset.transpose();
   envelope.scale = (centred.colwise().squaredNorm() / static_cast<double>(n)).cwiseSqrt().transpose();
-  for (int c = 0; c < kInputs; ++c) {
+  for (Eigen::Index c = 0; c < columns; ++c) {
     if (!(envelope.scale[c] > 0)) envelope.scale[c] = 1;  // never moved: any move is far
   }
   const Eigen::MatrixXd z = centred.array().rowwise() / envelope.scale.transpose().array();
@@ -72,7 +88,8 @@ InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs) {
   const Eigen::MatrixXd zc = z.rowwise() - envelope.mean.transpose();
   Eigen::MatrixXd covariance = zc.transpose() * zc / static_cast<double>(n);
   covariance.diagonal().array() += 1e-6;
-  envelope.inverse_covariance = covariance.ldlt().solve(Eigen::MatrixXd::Identity(kInputs, kInputs));
+  envelope.inverse_covariance =
+      covariance.ldlt().solve(Eigen::MatrixXd::Identity(columns, columns));
   double stress_sum = 0;
   for (const SurrogateInput& input : training_inputs) {
     stress_sum += material::VoigtToStress(input.stress_pa).norm();
@@ -141,7 +158,7 @@ SurrogateEnsemble SurrogateEnsemble::Assemble(std::vector<StressSurrogate> membe
 void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory>& histories) {
   std::vector<SurrogateInput> inputs;
   for (const StrainHistory& history : histories) {
-    const std::vector<SurrogateInput> steps = InputsOf(history);
+    const std::vector<SurrogateInput> steps = InputsOf(history, carried_variables());
     inputs.insert(inputs.end(), steps.begin(), steps.end());
   }
   envelope_ = FitEnvelope(inputs);
@@ -223,11 +240,20 @@ std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<Surrogat
   std::vector<EnsembleAnswer> answers(inputs.size());
   std::vector<std::vector<Vector6>> increments;
   const double members = static_cast<double>(members_.size());
+  const Eigen::Index carried = static_cast<Eigen::Index>(carried_variables().size());
+  for (EnsembleAnswer& answer : answers) {
+    answer.internal_variable_increments = Eigen::VectorXd::Zero(carried);
+  }
   for (const StressSurrogate& member : members_) {
     std::vector<Voigt6x6> tangents;
-    increments.push_back(member.StressIncrements(inputs, want_tangent ? &tangents : nullptr));
+    std::vector<Eigen::VectorXd> internal;
+    increments.push_back(member.StressIncrements(inputs, want_tangent ? &tangents : nullptr,
+                                                 carried > 0 ? &internal : nullptr));
     for (std::size_t n = 0; n < inputs.size() && want_tangent; ++n) {
       answers[n].tangent_pa += tangents[n] / members;
+    }
+    for (std::size_t n = 0; n < inputs.size() && carried > 0; ++n) {
+      answers[n].internal_variable_increments += internal[n] / members;
     }
   }
   for (std::size_t n = 0; n < inputs.size(); ++n) {
@@ -261,8 +287,10 @@ void SurrogateEnsemble::Save(const std::string& directory) const {
   PutVector(out, envelope_.offset);
   PutVector(out, envelope_.scale);
   PutVector(out, envelope_.mean);
-  for (int i = 0; i < kInputs; ++i) {
-    for (int j = 0; j < kInputs; ++j) out.Put(envelope_.inverse_covariance(i, j));
+  for (Eigen::Index i = 0; i < envelope_.offset.size(); ++i) {
+    for (Eigen::Index j = 0; j < envelope_.offset.size(); ++j) {
+      out.Put(envelope_.inverse_covariance(i, j));
+    }
   }
   out.Put(envelope_.largest_training_distance);
   out.Put(envelope_.stress_floor_pa);
@@ -298,9 +326,13 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
     ensemble.envelope_.offset = GetVector(in);
     ensemble.envelope_.scale = GetVector(in);
     ensemble.envelope_.mean = GetVector(in);
-    ensemble.envelope_.inverse_covariance.resize(kInputs, kInputs);
-    for (int i = 0; i < kInputs; ++i) {
-      for (int j = 0; j < kInputs; ++j) in.Get(ensemble.envelope_.inverse_covariance(i, j));
+    const Eigen::Index inputs = ensemble.envelope_.offset.size();
+    if (ensemble.envelope_.scale.size() != inputs || ensemble.envelope_.mean.size() != inputs) {
+      throw InputError("model", "envelope vectors of different sizes");
+    }
+    ensemble.envelope_.inverse_covariance.resize(inputs, inputs);
+    for (Eigen::Index i = 0; i < inputs; ++i) {
+      for (Eigen::Index j = 0; j < inputs; ++j) in.Get(ensemble.envelope_.inverse_covariance(i, j));
     }
     in.Get(ensemble.envelope_.largest_training_distance);
     in.Get(ensemble.envelope_.stress_floor_pa);
@@ -314,6 +346,12 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
     for (std::uint64_t k = 0; k < members; ++k) {
       ensemble.members_.push_back(StressSurrogate::Load(
           (std::filesystem::path(directory) / ("member_" + std::to_string(k) + ".pt")).string()));
+      if (ensemble.members_.back().architecture() != ensemble.members_.front().architecture()) {
+        throw InputError("model", "members of different architectures");
+      }
+    }
+    if (static_cast<std::size_t>(inputs - kInputs) != ensemble.carried_variables().size()) {
+      throw InputError("model", "the envelope's inputs are not the members'");
     }
   } catch (const InputError& e) {
     if (e.field() == "model") throw;
@@ -325,9 +363,11 @@ SurrogateEnsemble SurrogateEnsemble::Load(const std::string& directory) {
 std::vector<Vector6> Replay(const SurrogateEnsemble& ensemble, const StrainHistory& history) {
   return Replay(
       [&](const SurrogateInput& input) {
-        return ensemble.Answer({input}, false)[0].stress_increment_pa;
+        const EnsembleAnswer answer = ensemble.Answer({input}, false)[0];
+        return SurrogateOutput{answer.stress_increment_pa, answer.internal_variable_increments};
       },
-      history, [&](const Matrix3& stress_pa) { return ensemble.Admissible(stress_pa); });
+      history, ensemble.carried_variables(),
+      [&](const Matrix3& stress_pa) { return ensemble.Admissible(stress_pa); });
 }
 
 double ReplayError(const SurrogateEnsemble& ensemble, const StrainHistory& history) {

@@ -46,7 +46,7 @@
 namespace gonogo::ann {
 
 struct InputEnvelope {
-  Eigen::VectorXd mean;               // of the standardised training inputs (18)
+  Eigen::VectorXd mean;               // of the standardised training inputs (18 + carried)
   Eigen::VectorXd scale;              // standardisation: standard deviations of the raw inputs
   Eigen::VectorXd offset;             // and their means
   Eigen::MatrixXd inverse_covariance;
@@ -68,6 +68,7 @@ InputEnvelope FitEnvelope(const std::vector<SurrogateInput>& training_inputs);
 struct EnsembleAnswer {
   Vector6 stress_increment_pa = Vector6::Zero();  // mean over the members
   Voigt6x6 tangent_pa = Voigt6x6::Zero();         // mean, when asked
+  Eigen::VectorXd internal_variable_increments;   // mean, of the carried variables
   double distance = 0;                            // from the training inputs
   double relative_spread = 0;                     // see above
   bool out_of_distribution = false;
@@ -112,6 +113,10 @@ class SurrogateEnsemble {
   const InputEnvelope& envelope() const { return envelope_; }
   std::size_t size() const { return members_.size(); }
   const StressSurrogate& member(std::size_t k) const { return members_.at(k); }
+  // The internal variables the members carry (stress_surrogate.h), each input's last.
+  const std::vector<std::string>& carried_variables() const {
+    return members_.front().carried_variables();
+  }
 
   // A directory: member_<k>.pt (TorchScript, each loadable alone) and envelope.bin (the envelope
   // and thresholds, tagged little-endian doubles; GNGENV02, and GNGENV01 read with no cap). Load throws InputError("model", ...) for a

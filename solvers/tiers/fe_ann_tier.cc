@@ -6,6 +6,7 @@
 
 #include "solvers/ann/ann_material.h"
 #include "solvers/common/errors.h"
+#include "solvers/tiers/surrogate_training.h"
 
 namespace gonogo::tiers {
 
@@ -124,6 +125,8 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
 
   ann::AnnMaterialOptions material_options;
   material_options.fallback_enabled = options_.fallback_enabled;
+  // What a model carrying internal variables takes from a point's settled RVE.
+  material_options.internal_variables = RveFabricVariables();
   std::shared_ptr<const ann::AnnMaterial> material;
   const PointStandInFactory make_stand_in =
       [&](std::shared_ptr<const dem::rve::RveMaterial> template_rve) {

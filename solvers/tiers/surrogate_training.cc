@@ -146,6 +146,31 @@ ann::InternalVariables RveFabricVariables() {
   return internal;
 }
 
+ann::InternalVariables RveVariables(const std::vector<std::string>& names,
+                                   const std::string& field) {
+  const ann::InternalVariables all = RveFabricVariables();
+  std::vector<std::size_t> columns;
+  for (const std::string& name : names) {
+    const auto found = std::find(all.names.begin(), all.names.end(), name);
+    if (found == all.names.end()) {
+      std::string known;
+      for (const std::string& recorded : all.names) known += (known.empty() ? "" : ", ") + recorded;
+      throw InputError(field, "'" + name + "' is not a variable of the RVE's state (" + known + ")");
+    }
+    columns.push_back(static_cast<std::size_t>(found - all.names.begin()));
+  }
+  ann::InternalVariables narrowed;
+  if (names.empty()) return narrowed;
+  narrowed.names = names;
+  narrowed.read = [read = all.read, columns](const material::MaterialState& state) {
+    const std::vector<double> values = read(state);
+    std::vector<double> chosen;
+    for (std::size_t column : columns) chosen.push_back(values[column]);
+    return chosen;
+  };
+  return narrowed;
+}
+
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
                               const ComputeContext& context,
                               const ann::InternalVariables& internal) {
@@ -217,14 +242,23 @@ TrainedSurrogate TrainSurrogateOnRve(
   const std::vector<NamedLabPath> held_out_paths = HeldOutPaths(recipe);
   const double all_paths = static_cast<double>(training_paths.size() + held_out_paths.size());
 
+  // The histories record what the network carries, and nothing more.
+  const ann::InternalVariables carried = RveVariables(
+      recipe.architecture.carried_variables, "recipe.architecture.carried_variables");
   TrainedSurrogate trained;
   const auto start = std::chrono::steady_clock::now();
-  trained.training = RunLabPaths(*rve, training_paths, recipe.threads, [&](int done) {
-    if (stage) stage("paths", done / all_paths);
-  });
-  trained.held_out = RunLabPaths(*rve, held_out_paths, recipe.threads, [&](int done) {
-    if (stage) stage("paths", (training_paths.size() + done) / all_paths);
-  });
+  trained.training = RunLabPaths(
+      *rve, training_paths, recipe.threads,
+      [&](int done) {
+        if (stage) stage("paths", done / all_paths);
+      },
+      carried);
+  trained.held_out = RunLabPaths(
+      *rve, held_out_paths, recipe.threads,
+      [&](int done) {
+        if (stage) stage("paths", (training_paths.size() + done) / all_paths);
+      },
+      carried);
   trained.generation_seconds = Seconds(start);
   trained.training.insert(trained.training.end(), recipe.rig_training.begin(),
                           recipe.rig_training.end());

@@ -65,9 +65,13 @@ std::vector<ann::StrainHistory> RunLabPaths(const material::ConstitutiveModel& m
 
 // What a history can record of a DE RVE's state beside its stress (dem::rve::RveSnapshot):
 // coordination_number, solid_fraction and the contact fabric fabric_xx ... fabric_xy (Voigt
-// order, tensor components; trace 1). For studies of what the network might carry: the recipe's
-// histories record nothing beyond the stress, so their data hashes do not depend on it.
+// order, tensor components; trace 1). The recipe's histories record only what its network
+// carries (RveVariables below), so the data hashes of a network that carries nothing do not
+// depend on this.
 ann::InternalVariables RveFabricVariables();
+// The reader of RveFabricVariables narrowed to `names` (in that order); throws
+// InputError(field, ...) for a name it does not read.
+ann::InternalVariables RveVariables(const std::vector<std::string>& names, const std::string& field);
 
 struct HeldOutResult {
   std::string path;

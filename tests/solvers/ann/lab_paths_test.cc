@@ -262,6 +262,19 @@ TEST(StrainHistories, RoundTripBitForBitAndRefuseDamagedBytes) {
   std::string foreign = bytes;
   foreign[0] = 'X';
   EXPECT_THROW(ParseHistory(foreign), InputError);
+  // Without initial internal variables the bytes are the first format's (the data hashes of
+  // histories recorded before them stay); with them, the second's, 8 bytes a variable longer.
+  EXPECT_EQ(bytes.substr(0, 8), "GNGHIS01");
+  StrainHistory with_start = history;
+  with_start.initial_internal_variables = {0.55, 5.0};
+  const std::string started = SerializeHistory(with_start);
+  EXPECT_EQ(started.substr(0, 8), "GNGHIS02");
+  EXPECT_EQ(started.size(), bytes.size() + 2 * 8u);
+  EXPECT_EQ(ParseHistory(started).initial_internal_variables, with_start.initial_internal_variables);
+  EXPECT_EQ(SerializeHistory(ParseHistory(started)), started);
+  EXPECT_THROW(ParseHistory(started.substr(0, started.size() - 1)), InputError);
+  with_start.initial_internal_variables = {0.55};
+  EXPECT_THROW(SerializeHistory(with_start), InputError) << "one per name";
 }
 
 // Drives `model` from its initial state through `history`'s increments; the stresses after each.
@@ -324,8 +337,12 @@ TEST(PathRecorder, RecordsEachStepWithTheInternalVariablesItIsAskedFor) {
                                       .equivalent_plastic_strain()});
   }
   EXPECT_GT(path.internal_variables.back()[0], 1e-3) << "the shear did not yield";
+  EXPECT_EQ(path.initial_internal_variables, std::vector<double>{0.0}) << "read at the start";
+  EXPECT_EQ(RunLabPath(soil, LabPathSpec{}, {}, plastic_strain).initial_internal_variables,
+            std::vector<double>{0.0});
   EXPECT_TRUE(plain.Histories().at(0).internal_variable_names.empty());
   EXPECT_TRUE(plain.Histories().at(0).internal_variables.empty());
+  EXPECT_TRUE(plain.Histories().at(0).initial_internal_variables.empty());
 }
 
 // A rotated copy is the same path in a turned frame: a quarter turn about z swaps xx and yy and
@@ -353,10 +370,14 @@ TEST(StrainHistories, RotatedCopiesAreThePathsOfTheSameIsotropicSoilInTurnedFram
   with_fabric.internal_variable_names = {"coordination_number", "fabric_xx", "fabric_yy",
                                          "fabric_zz", "fabric_yz", "fabric_xz", "fabric_xy"};
   with_fabric.internal_variables.assign(shear.steps(), {5.5, 0.4, 0.35, 0.25, 0.01, -0.1, 0.02});
-  const std::vector<double> fabric_turned = Rotated(with_fabric, quarter_turn).internal_variables[3];
+  with_fabric.initial_internal_variables = {5.5, 0.4, 0.35, 0.25, 0.01, -0.1, 0.02};
+  const StrainHistory fabric_rotated = Rotated(with_fabric, quarter_turn);
   const std::vector<double> expected = {5.5, 0.35, 0.4, 0.25, -0.1, -0.01, -0.02};
-  for (std::size_t k = 0; k < expected.size(); ++k) {
-    EXPECT_NEAR(fabric_turned[k], expected[k], 1e-15) << with_fabric.internal_variable_names[k];
+  for (const std::vector<double>& fabric_turned :
+       {fabric_rotated.internal_variables[3], fabric_rotated.initial_internal_variables}) {
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      EXPECT_NEAR(fabric_turned[k], expected[k], 1e-15) << with_fabric.internal_variable_names[k];
+    }
   }
 
   const std::vector<StrainHistory> copies = WithRotatedCopies({shear}, 2, 7);

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -88,34 +89,155 @@ TEST(StressSurrogate, TheTangentIsTheNetworksOwnDerivative) {
   EXPECT_LT(largest_error, 1e-5 * largest_entry);
 }
 
+// The fused kernel's answers against the module's on the same inputs: the largest of each and the
+// largest difference (the carried increments' zero for a network that carries nothing).
+struct FusedAgainstModule {
+  double largest_stress = 0, stress_error = 0;
+  double largest_entry = 0, tangent_error = 0;
+  double largest_carried = 0, carried_error = 0;
+};
+
+FusedAgainstModule Compare(const StressSurrogate& surrogate,
+                           const std::vector<SurrogateInput>& inputs) {
+  std::vector<Voigt6x6> fused_tangents, module_tangents;
+  std::vector<Eigen::VectorXd> fused_carried, module_carried;
+  const std::vector<Vector6> fused =
+      surrogate.StressIncrements(inputs, &fused_tangents, &fused_carried);
+  const std::vector<Vector6> module =
+      surrogate.StressIncrementsByModule(inputs, &module_tangents, &module_carried);
+  EXPECT_EQ(fused.size(), module.size());
+  FusedAgainstModule c;
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    c.largest_stress = std::max(c.largest_stress, module[n].cwiseAbs().maxCoeff());
+    c.stress_error = std::max(c.stress_error, (fused[n] - module[n]).cwiseAbs().maxCoeff());
+    c.largest_entry = std::max(c.largest_entry, module_tangents[n].cwiseAbs().maxCoeff());
+    c.tangent_error =
+        std::max(c.tangent_error, (fused_tangents[n] - module_tangents[n]).cwiseAbs().maxCoeff());
+    EXPECT_EQ(module_carried[n].size(), fused_carried[n].size());
+    if (module_carried[n].size() == 0) continue;
+    c.largest_carried = std::max(c.largest_carried, module_carried[n].cwiseAbs().maxCoeff());
+    c.carried_error = std::max(c.carried_error,
+                               (fused_carried[n] - module_carried[n]).cwiseAbs().maxCoeff());
+  }
+  return c;
+}
+
 // The fused Eigen kernel that answers (fused_mlp.h) against the TorchScript module's forward and
 // autograd, on the same weights: equal to rounding. And the anchor: no strain, no stress change.
 TEST(StressSurrogate, TheFusedKernelGivesTheModulesAnswersAndNothingAtRest) {
   const StressSurrogate& surrogate = Trained();
   std::vector<SurrogateInput> inputs = InputsOf(Path(LabPath::kRandomWalk, 30e3, 0.004, 7));
-  std::vector<Voigt6x6> fused_tangents, module_tangents;
-  const std::vector<Vector6> fused = surrogate.StressIncrements(inputs, &fused_tangents);
-  const std::vector<Vector6> module = surrogate.StressIncrementsByModule(inputs, &module_tangents);
-  ASSERT_EQ(fused.size(), module.size());
-  double largest_stress = 0, stress_error = 0, largest_entry = 0, tangent_error = 0;
-  for (std::size_t n = 0; n < inputs.size(); ++n) {
-    largest_stress = std::max(largest_stress, module[n].cwiseAbs().maxCoeff());
-    stress_error = std::max(stress_error, (fused[n] - module[n]).cwiseAbs().maxCoeff());
-    largest_entry = std::max(largest_entry, module_tangents[n].cwiseAbs().maxCoeff());
-    tangent_error =
-        std::max(tangent_error, (fused_tangents[n] - module_tangents[n]).cwiseAbs().maxCoeff());
-  }
-  std::cout << "  fused against module: d_sigma " << stress_error << " Pa off (largest "
-            << largest_stress << " Pa), tangent " << tangent_error << " Pa off (largest "
-            << largest_entry << " Pa)\n";
-  EXPECT_GT(largest_stress, 1);
-  EXPECT_LE(stress_error, 1e-9 * largest_stress);
-  EXPECT_LE(tangent_error, 1e-9 * largest_entry);
+  const FusedAgainstModule c = Compare(surrogate, inputs);
+  std::cout << "  fused against module: d_sigma " << c.stress_error << " Pa off (largest "
+            << c.largest_stress << " Pa), tangent " << c.tangent_error << " Pa off (largest "
+            << c.largest_entry << " Pa)\n";
+  EXPECT_GT(c.largest_stress, 1);
+  EXPECT_LE(c.stress_error, 1e-9 * c.largest_stress);
+  EXPECT_LE(c.tangent_error, 1e-9 * c.largest_entry);
   for (SurrogateInput& input : inputs) input.strain_increment.setZero();
   for (const std::vector<Vector6>& at_rest :
        {surrogate.StressIncrements(inputs), surrogate.StressIncrementsByModule(inputs)}) {
     for (const Vector6& increment : at_rest) EXPECT_EQ(increment.cwiseAbs().maxCoeff(), 0.0);
   }
+}
+
+// A network that carries an internal variable (here Drucker-Prager's equivalent plastic strain,
+// which its histories record): one more input and one more output. Its name is in the
+// architecture and the saved module; the fused kernel answers the module's stress, tangent (the
+// stress rows) and carried increment; the tangent is the derivative of d_sigma; replayed along a
+// held-out shear past yield it carries the variable close to the soil's, feeding back its own;
+// what it cannot carry or be given is refused by name.
+TEST(StressSurrogate, CarriesAnInternalVariableAsAFurtherInputAndOutput) {
+  const InternalVariables plastic = testing::PlasticStrain();
+  TrainingOptions options;
+  options.epochs = 300;
+  options.batch_size = 64;
+  MlpArchitecture architecture;
+  architecture.carried_variables = plastic.names;
+  const StressSurrogate surrogate =
+      StressSurrogate::Train(TrainingPaths(plastic), architecture, options);
+  EXPECT_EQ(surrogate.architecture(), "mlp-64x64-tanh-anchored-carrying-equivalent_plastic_strain");
+  EXPECT_EQ(surrogate.carried_variables(), plastic.names);
+
+  const StrainHistory shear = Path(LabPath::kSimpleShear, 25e3, 0.04, 1, plastic);
+  std::vector<SurrogateInput> inputs = InputsOf(shear, plastic.names);
+  ASSERT_EQ(inputs.front().internal_variables.size(), 1);
+  EXPECT_EQ(inputs.front().internal_variables[0], 0.0) << "a fresh point has not yielded";
+  const FusedAgainstModule c = Compare(surrogate, inputs);
+  EXPECT_LE(c.stress_error, 1e-9 * c.largest_stress);
+  EXPECT_LE(c.tangent_error, 1e-9 * c.largest_entry);
+  EXPECT_GT(c.largest_carried, 1e-5);
+  EXPECT_LE(c.carried_error, 1e-9 * c.largest_carried);
+  std::vector<Voigt6x6> fused_tangents;
+  std::vector<Eigen::VectorXd> fused_carried;
+  const std::vector<Vector6> fused =
+      surrogate.StressIncrements(inputs, &fused_tangents, &fused_carried);
+  // The tangent is d(d_sigma)/d(d_eps): central differences of the stress rows.
+  const double h = 1e-7;
+  double difference_error = 0;
+  for (std::size_t n = 0; n < 20; ++n) {
+    for (int column = 0; column < 6; ++column) {
+      SurrogateInput up = inputs[n], down = inputs[n];
+      up.strain_increment[column] += h;
+      down.strain_increment[column] -= h;
+      const Vector6 difference =
+          (surrogate.StressIncrements({up})[0] - surrogate.StressIncrements({down})[0]) / (2 * h);
+      difference_error = std::max(
+          difference_error, (difference - fused_tangents[n].col(column)).cwiseAbs().maxCoeff());
+    }
+  }
+  EXPECT_LT(difference_error, 1e-5 * c.largest_entry);
+
+  // Replayed on its own stresses and plastic strain.
+  std::vector<double> carried_along;
+  const std::vector<Vector6> replayed = Replay(
+      [&](const SurrogateInput& input) {
+        carried_along.push_back(input.internal_variables[0]);
+        std::vector<Eigen::VectorXd> increment;
+        const Vector6 stress_increment = surrogate.StressIncrements({input}, nullptr, &increment)[0];
+        return SurrogateOutput{stress_increment, increment[0]};
+      },
+      shear, plastic.names);
+  EXPECT_EQ(ReplayError(replayed, shear), ReplayError(surrogate, shear));
+  const double recorded = shear.internal_variables[shear.steps() - 2][0];
+  std::cout << "  carrying the plastic strain: shear at 25 kPa replayed " << 100 * ReplayError(replayed, shear)
+            << " % off; plastic strain before the last step " << carried_along.back()
+            << " (the soil's " << recorded << ")\n";
+  EXPECT_LT(ReplayError(replayed, shear), 0.05);
+  EXPECT_GT(recorded, 1e-3) << "the shear did not yield";
+  EXPECT_NEAR(carried_along.back(), recorded, 0.1 * recorded);
+
+  // Saved and loaded, it carries the same.
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("gonogo_carrying_" + std::to_string(getpid()) + ".pt");
+  surrogate.Save(file.string());
+  const StressSurrogate loaded = StressSurrogate::Load(file.string());
+  std::filesystem::remove(file);
+  EXPECT_EQ(loaded.carried_variables(), plastic.names);
+  std::vector<Eigen::VectorXd> loaded_carried;
+  EXPECT_EQ(loaded.StressIncrements(inputs, nullptr, &loaded_carried), fused);
+  EXPECT_EQ(loaded_carried[7], fused_carried[7]);
+
+  // Refused by name: a history that does not record the variable, a point that does not carry
+  // it, a tensor's component.
+  const auto field_of = [](const std::function<void()>& call) {
+    try {
+      call();
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string("(nothing thrown)");
+  };
+  EXPECT_EQ(field_of([&] { InputsOf(Path(LabPath::kTriaxial, 30e3, 0.02), plastic.names); }),
+            "histories");
+  EXPECT_EQ(field_of([&] { surrogate.StressIncrements(InputsOf(shear)); }), "inputs");
+  EXPECT_EQ(field_of([&] {
+              StressSurrogate::Train(TrainingPaths(), architecture, options);
+            }),
+            "histories");
+  MlpArchitecture tensor;
+  tensor.carried_variables = {"fabric_xz"};
+  EXPECT_EQ(field_of([&] { tensor.Validate("architecture."); }), "architecture.carried_variables");
 }
 
 // Transfer learning (seed 000's future work): the surrogate of one soil fine-tuned to another

@@ -363,5 +363,84 @@ TEST(AnnMaterial, StatesSaveAndRestoreOnAndOffTheNetwork) {
   EXPECT_THROW(ann.RestoreState("not a state"), InputError);
 }
 
+// An ensemble that carries an internal variable (Drucker-Prager's equivalent plastic strain):
+// its envelope covers the carried input, it saves and loads whole, and the ANN material takes the
+// variable from the real model's state a point starts from and carries it step by step, close to
+// the soil's along a shear past yield; a state saves and restores with it. Without a reader of the
+// real state, or with one that does not read the variable, the material is refused by name.
+TEST(AnnMaterial, CarriesTheEnsemblesInternalVariableFromTheRealModelsState) {
+  const InternalVariables plastic = testing::PlasticStrain();
+  TrainingOptions options;
+  options.epochs = 100;
+  options.batch_size = 64;
+  MlpArchitecture architecture;
+  architecture.carried_variables = plastic.names;
+  const auto ensemble = std::make_shared<const SurrogateEnsemble>(
+      SurrogateEnsemble::Train(TrainingPaths(plastic), architecture, options));
+  EXPECT_EQ(ensemble->carried_variables(), plastic.names);
+  EXPECT_EQ(ensemble->envelope().offset.size(), 19);
+
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() /
+                                          ("gonogo_carrying_" + std::to_string(getpid()));
+  ensemble->Save(directory.string());
+  const SurrogateEnsemble loaded = SurrogateEnsemble::Load(directory.string());
+  std::filesystem::remove_all(directory);
+  const StrainHistory shear = Path(LabPath::kSimpleShear, 25e3, 0.04, 1, plastic);
+  const std::vector<SurrogateInput> inputs = InputsOf(shear, plastic.names);
+  const std::vector<EnsembleAnswer> a = ensemble->Answer(inputs, false);
+  const std::vector<EnsembleAnswer> b = loaded.Answer(inputs, false);
+  for (std::size_t n = 0; n < inputs.size(); ++n) {
+    EXPECT_EQ(a[n].stress_increment_pa, b[n].stress_increment_pa);
+    EXPECT_EQ(a[n].internal_variable_increments, b[n].internal_variable_increments);
+    EXPECT_EQ(a[n].distance, b[n].distance);
+  }
+  EXPECT_LT(FlaggedFraction(a), 0.1) << "a path like the training's";
+  SurrogateInput unyielded_far = inputs.back();
+  unyielded_far.internal_variables[0] = 1.0;  // a plastic strain no path reached
+  EXPECT_GT(ensemble->Answer({unyielded_far}, false)[0].distance, ensemble->distance_threshold());
+
+  const auto field_of = [&](const AnnMaterialOptions& material_options) {
+    try {
+      AnnMaterial(ensemble, SharedSoil(), material_options);
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string("(nothing thrown)");
+  };
+  EXPECT_EQ(field_of({}), "internal_variables");
+  AnnMaterialOptions other_reader;
+  other_reader.internal_variables = FellBackAt();
+  EXPECT_EQ(field_of(other_reader), "internal_variables");
+
+  AnnMaterialOptions material_options;
+  material_options.internal_variables = plastic;
+  // The network answers every step (a flagged one too, counted): what is checked is its carrying.
+  material_options.fallback_enabled = false;
+  const AnnMaterial ann(ensemble, SharedSoil(), material_options);
+  std::unique_ptr<material::MaterialState> state = ann.InitialState();
+  ASSERT_EQ(static_cast<const AnnState&>(*state).internal_variables.size(), 1);
+  EXPECT_EQ(static_cast<const AnnState&>(*state).internal_variables[0], 0.0);
+  for (const Matrix3& increment : shear.increments) {
+    std::vector<material::PointResponse> step = ann.Update({{increment, state.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk) << step[0].reason;
+    state = std::move(step[0].state);
+  }
+  const auto& end = static_cast<const AnnState&>(*state);
+  const double soil = shear.internal_variables.back()[0];
+  std::cout << "  plastic strain carried along the shear at 25 kPa: " << end.internal_variables[0]
+            << " (the soil's " << soil << "); " << ann.log().unanswered_flags()
+            << " steps flagged\n";
+  EXPECT_NEAR(end.internal_variables[0], soil, 0.15 * soil);
+  const std::string bytes = end.Serialize();
+  const std::unique_ptr<material::MaterialState> restored_state = ann.RestoreState(bytes);
+  const auto& restored = static_cast<const AnnState&>(*restored_state);
+  EXPECT_EQ(restored.internal_variables, end.internal_variables);
+  EXPECT_EQ(restored.Serialize(), bytes);
+  // A state saved by a material whose ensemble carries nothing is not this material's.
+  const AnnMaterial plain(SharedEnsemble(), SharedSoil());
+  EXPECT_THROW(ann.RestoreState(plain.InitialState()->Serialize()), InputError);
+  EXPECT_THROW(plain.RestoreState(bytes), InputError);
+}
+
 }  // namespace
 }  // namespace gonogo::ann
