@@ -180,6 +180,14 @@ Command AddTrainCommand(CLI::App& parent) {
   train->add_flag_function(
       "--unanchored", [&r](int64_t) { r.set_unanchored(true); },
       "no anchoring at rest (d_sigma(0) not forced to 0)");
+  train->add_option_function<std::vector<std::string>>(
+           "--carry",
+           [&r](const std::vector<std::string>& names) {
+             for (const std::string& name : names) r.add_carried_variables(name);
+           },
+           "internal variables of the RVE's state the network carries as further inputs and "
+           "outputs: coordination_number, solid_fraction [default: none]")
+      ->type_name("NAME ...");
   train->add_option_function<std::string>(
            "--from", [&r](const std::string& v) { r.set_from_model(v); },
            "transfer learning: fine-tune this registered model on this soil's data")

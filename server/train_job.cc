@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <sstream>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -96,6 +97,14 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   Require(!(fine_tuning && request.unanchored()), "unanchored",
           "a fine-tuned model keeps its base model's anchoring");
   recipe.architecture.anchored = !request.unanchored();
+  if (request.carried_variables_size() > 0) {
+    Require(!fine_tuning, "carried_variables",
+            "a fine-tuned model carries what its base model carries");
+    recipe.architecture.carried_variables.assign(request.carried_variables().begin(),
+                                                 request.carried_variables().end());
+    recipe.architecture.Validate("");
+    tiers::RveVariables(recipe.architecture.carried_variables, "carried_variables");
+  }
   if (request.members() != 0) {
     Require(!fine_tuning, "members", "a fine-tuned model keeps its base model's members");
     Require(request.members() >= 3 && request.members() <= 64, "members", "must lie in [3, 64]");
@@ -154,16 +163,37 @@ RigRecipe RigRecipeOf(const v1::TrainSurrogateRequest& request) {
   return rig;
 }
 
-// What a stored history is: the soil, the configuration, the RVE's code, the path.
+// The internal variables a registered architecture carries ("...-carrying-a+b": a, b).
+std::vector<std::string> CarriedOfArchitecture(const std::string& architecture) {
+  const std::string marker = "-carrying-";
+  std::vector<std::string> carried;
+  const size_t at = architecture.find(marker);
+  if (at == std::string::npos) return carried;
+  std::stringstream names(architecture.substr(at + marker.size()));
+  for (std::string name; std::getline(names, name, '+');) carried.push_back(name);
+  return carried;
+}
+
+// ";recorded=a+b" when a history records the RVE's internal variables a and b, else nothing (the
+// keys of histories that record none are those from before any did).
+std::string RecordedSuffix(const std::vector<std::string>& recorded) {
+  std::string names;
+  for (const std::string& name : recorded) names += (names.empty() ? "" : "+") + name;
+  return names.empty() ? "" : ";recorded=" + names;
+}
+
+// What a stored history is: the soil, the configuration, the RVE's code, the path, and what it
+// records of the RVE's state.
 std::string HistoryKey(const std::string& soil_parameters, const std::string& preset,
-                       const std::string& rve_version, const ann::LabPathSpec& spec) {
+                       const std::string& rve_version, const ann::LabPathSpec& spec,
+                       const std::vector<std::string>& recorded) {
   char path[256];
   std::snprintf(path, sizeof path, "path=%s;p=%.17g;max=%.17g;steps=%d;settle=%d;walk=%.17g;seed=%llu",
                 ann::LabPathName(spec.path).c_str(), spec.pressure_pa, spec.max_strain, spec.steps,
                 spec.settle_steps, spec.walk_step_strain,
                 static_cast<unsigned long long>(spec.seed));
   return "gonogo-rve-path-v1;soil=" + soil_parameters + ";preset=" + preset +
-         ";rve=" + rve_version + ";" + path;
+         ";rve=" + rve_version + ";" + path + RecordedSuffix(recorded);
 }
 
 // Runs `tasks` on the pool, at most kInFlightPerWorker per worker at a time, and hands each
@@ -253,13 +283,13 @@ struct PlannedPath {
 // The k-th kept path of a rig run (training or held out), by what the run and the choice were.
 std::string RigPathKey(const std::string& soil_parameters, const std::string& preset,
                        const std::string& rve_version, const RigRecipe& rig,
-                       const std::string& role, int k) {
+                       const std::string& role, int k, const std::vector<std::string>& recorded) {
   char text[256];
   std::snprintf(text, sizeof text, "load=%.17g;d=%.17g;b=%.17g;kept=%d+%d;%s=%d", rig.load_n,
                 rig.diameter_m, rig.width_m, rig.training_points, rig.held_out_points,
                 role.c_str(), k);
   return "gonogo-rig-path-v1;soil=" + soil_parameters + ";preset=" + preset +
-         ";rve=" + rve_version + ";" + text;
+         ";rve=" + rve_version + ";" + text + RecordedSuffix(recorded);
 }
 
 // "rig 1000 N point 3": kept path k (from 0) of a rig run.
@@ -331,13 +361,19 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     const std::string soil_text = CanonicalText(soil.parameters);
     const std::string& preset = config_.fe_de_preset;
     const std::string rve_version = tiers_.Get("fe-de").Version();
-    const std::string dataset = cache::DatasetId(soil.soil, preset, soil_text);
     const tiers::SurrogateRegistry registry(config_.models_dir);
     std::optional<tiers::RegisteredSurrogate> base;
     if (fine_tuning) {
       base = registry.Describe(request.from_model());
       Require(base.has_value(), "from_model", "model '" + request.from_model() + "' is gone");
     }
+    // What the paths record of the RVE's state: what the network carries. Histories that record
+    // it are a dataset of their own, so that a dataset exports as one table.
+    const std::vector<std::string> recorded = fine_tuning
+                                                  ? CarriedOfArchitecture(base->architecture)
+                                                  : recipe.architecture.carried_variables;
+    std::string dataset = cache::DatasetId(soil.soil, preset, soil_text);
+    for (const std::string& name : recorded) dataset += "+" + name;
 
     // 1. The strain paths: the stored ones from the dataset, the others on the pool.
     std::vector<PlannedPath> planned;
@@ -346,7 +382,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
           std::make_pair(tiers::HeldOutPaths(recipe), cache::kHeldOutRole)}) {
       for (const tiers::NamedLabPath& path : paths) {
         planned.push_back(
-            {path, role, HistoryKey(soil_text, preset, rve_version, path.spec), false});
+            {path, role, HistoryKey(soil_text, preset, rve_version, path.spec, recorded), false});
       }
     }
     // Seed 000's step 2: the kept paths of an fe-de rig run's points, after the lab paths.
@@ -362,7 +398,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
           path.path.name = role == cache::kTrainingRole ? RigPathName(rig, k)
                                                         : "rig point " + std::to_string(k + 1);
           path.role = role;
-          path.key = RigPathKey(soil_text, preset, rve_version, rig, role, k);
+          path.key = RigPathKey(soil_text, preset, rve_version, rig, role, k, recorded);
           path.from_rig = true;
           rig_paths.push_back(planned.size());
           planned.push_back(std::move(path));
@@ -387,6 +423,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       *work.mutable_rve_path() = ToProto(planned[k].path.spec);
       work.mutable_rve_path()->set_soil_parameters(soil_text);
       work.mutable_rve_path()->set_fe_de_preset(preset);
+      for (const std::string& name : recorded) work.mutable_rve_path()->add_recorded_variables(name);
       path_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
       task_path.push_back(k);
     }
@@ -400,6 +437,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       run->set_width_m(rig.width_m);
       run->set_training_points(rig.training_points);
       run->set_held_out_points(rig.held_out_points);
+      for (const std::string& name : recorded) run->add_recorded_variables(name);
       // First in the queue: it is the longest task of the job.
       path_tasks.insert(path_tasks.begin(), TrainingTask(std::move(work), config_.task_delay_ms));
       task_path.insert(task_path.begin(), planned.size());
@@ -495,6 +533,9 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     member_work.set_learning_rate(recipe.training.learning_rate);
     member_work.set_anchored(recipe.architecture.anchored);
     for (int width : recipe.architecture.hidden_widths) member_work.add_hidden_widths(width);
+    for (const std::string& name : recipe.architecture.carried_variables) {
+      member_work.add_carried_variables(name);
+    }
     std::vector<TaskSpec> member_tasks;
     for (int k = 0; k < members; ++k) {
       v1::TrainingWork work;

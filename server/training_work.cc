@@ -37,8 +37,11 @@ std::string RunRvePath(const v1::RvePathWork& work, const ComputeContext& contex
   if (context.Cancelled()) throw CancelledError();
   const ann::LabPathSpec spec = LabPathSpecOf(work);
   spec.Validate("training.rve_path.");
+  const ann::InternalVariables recorded = tiers::RveVariables(
+      {work.recorded_variables().begin(), work.recorded_variables().end()},
+      "training.rve_path.recorded_variables");
   const std::vector<ann::StrainHistory> history =
-      tiers::RunLabPaths(*rve, {{work.path(), spec}}, 1);
+      tiers::RunLabPaths(*rve, {{work.path(), spec}}, 1, {}, recorded);
   return ann::SerializeHistory(history.front());
 }
 
@@ -62,6 +65,8 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
     ann::MlpArchitecture architecture;
     architecture.hidden_widths.assign(work.hidden_widths().begin(), work.hidden_widths().end());
     architecture.anchored = work.anchored();
+    architecture.carried_variables.assign(work.carried_variables().begin(),
+                                          work.carried_variables().end());
     architecture.Validate("training.train_member.");
     return ann::StressSurrogate::Train(histories, architecture, options);
   }();
@@ -78,7 +83,10 @@ std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& cont
   request.wheel_load_n = work.wheel_load_n();
   request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
   const tiers::FeDeTier fe_de(tiers::FeDeOptions::Preset(work.fe_de_preset()));
-  const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(fe_de, request, context);
+  const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(
+      fe_de, request, context,
+      tiers::RveVariables({work.recorded_variables().begin(), work.recorded_variables().end()},
+                          "training.rig_paths.recorded_variables"));
   const int count = static_cast<int>(recorded.paths.size());
   Require(count > 0, "training.rig_paths", "the rig run recorded no paths");
   v1::RigPathsOutput output;

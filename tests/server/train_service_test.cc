@@ -220,6 +220,12 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       {"train --soil seed000_sand_rve100 --rig-load-n 1000 --rig-width-m 0.6",
        "rig_width_m: must lie in (0, rig_diameter_m]"},
       {"dataset export no-such --out " + exported.string(), "NOT_FOUND: dataset_id"},
+      {"train --soil seed000_sand_rve100 --carry void_ratio",
+       "carried_variables: 'void_ratio' is not a variable of the RVE's state"},
+      {"train --soil seed000_sand_rve100 --carry fabric_xz", "carried_variables: 'fabric_xz' is a "
+                                                             "tensor's component"},
+      {"train --soil seed000_sand_rve100 --from " + trained + " --carry coordination_number",
+       "carried_variables: a fine-tuned model carries what its base model carries"},
   };
   for (const auto& [args, message] : refusals) {
     const CliRun refused = Gonogo(server.endpoint(), args);
@@ -229,6 +235,37 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   const CliRun bad_format = Gonogo(server.endpoint(), "dataset export " + dataset +
                                                           " --format xls --out " + exported.string());
   EXPECT_EQ(bad_format.exit_code, 2) << bad_format.out;
+
+  // A network that carries the RVE's coordination number: its paths record it, in a dataset of
+  // their own (none of the stored paths, which do not, is reused), the registered architecture
+  // says what it carries, the export has the column, and an fe-ann curve runs with it.
+  const CliRun carrying = Gonogo(server.endpoint(), std::string("train ") + kRecipe +
+                                                        " --hidden 16x16 --carry coordination_number");
+  ASSERT_EQ(carrying.exit_code, 0) << carrying.out;
+  const std::string carrying_id = RegisteredId(carrying.out);
+  ASSERT_FALSE(carrying_id.empty()) << carrying.out;
+  EXPECT_NE(carrying.out.find("RVE strain paths: 0 of 27 (0 from dataset " + dataset +
+                              "+coordination_number"),
+            std::string::npos)
+      << carrying.out;
+  EXPECT_NE(carrying.out.find("mlp-16x16-tanh-anchored-carrying-coordination_number, 3 members"),
+            std::string::npos)
+      << carrying.out;
+  const CliRun carried_export =
+      Gonogo(server.endpoint(), "dataset export " + dataset + "+coordination_number --out " +
+                                    (dir.path() / "export3").string());
+  ASSERT_EQ(carried_export.exit_code, 0) << carried_export.out;
+  const std::string carried_table =
+      ReadFile(dir.path() / "export3" / (dataset + "+coordination_number.csv"));
+  EXPECT_NE(carried_table.find(",sigma_xy_pa,coordination_number\n"), std::string::npos)
+      << carried_table.substr(0, 300);
+  const CliRun carrying_curve = Gonogo(
+      server.endpoint(),
+      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + carrying_id);
+  ASSERT_EQ(carrying_curve.exit_code, 0) << carrying_curve.out;
+  EXPECT_NE(carrying_curve.out.find("surrogate model " + carrying_id), std::string::npos)
+      << carrying_curve.out;
   EXPECT_EQ(server.Terminate(), 0);
 }
 
