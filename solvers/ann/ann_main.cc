@@ -2,7 +2,7 @@
 //
 //   gonogo-ann --soil seed000_sand_rve100 [--preset ci] [--steps 50] [--walks 16]
 //              [--pressures-kpa 2.5 5 ...] [--architecture 64x64 ...] [--members 3]
-//              [--epochs 300] [--threads T] [--out DIR]
+//              [--carry coordination_number] [--epochs 300] [--threads T] [--out DIR]
 //
 // Runs the laboratory paths of the fe-ann recipe (solvers/tiers/surrogate_training.h) on the
 // soil's RVE, with the RVE numerics of the fe-de preset: a training set and a held-out set (other
@@ -439,10 +439,15 @@ int Run(const CommandLine& line) {
         throw InputError("--carry", "a GRU carries its hidden state, not internal variables");
       }
     } else {
-      MlpArchitecture architecture = ParseArchitecture(text);
-      architecture.carried_variables = line.carried;
-      architecture.Validate("--carry.");
+      ParseArchitecture(text);
     }
+  }
+  MlpArchitecture carrying;
+  carrying.carried_variables = line.carried;
+  try {
+    carrying.Validate("");
+  } catch (const InputError& e) {  // named by the flag that gave it
+    throw InputError("--carry", std::string(e.what()).substr(e.field().size() + 2));
   }
   tiers::RveVariables(line.carried, "--carry");  // refused before any path runs
   std::optional<SurrogateEnsemble> from;  // loaded before any path runs

@@ -4,6 +4,8 @@
 # fine-tunes that ensemble (--from) beside a new one from scratch and registers both (--register)
 # with their provenance, the fine-tuned one naming its base. The first run records the RVE's
 # fabric (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts.
+# A network carrying the coordination number (--carry) is trained; what cannot be carried is
+# refused by name.
 set -eu
 ann="$1"
 out="$2"
@@ -50,4 +52,22 @@ if "$ann" --from "$out/no-such-model" > /dev/null 2> "$out/error.txt"; then
   exit 1
 fi
 grep -q "model" "$out/error.txt"
+# A network that carries the RVE's coordination number (--carry), and what cannot be carried,
+# refused by name before any path runs.
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 1 \
+  --architecture 8 --epochs 2 --threads 1 --carry coordination_number > "$out/carrying.csv" \
+  2> "$out/carrying_progress.txt"
+grep -q '^mlp-8-tanh-anchored-carrying-coordination_number,3,2,[0-9][0-9]*,' "$out/carrying.csv"
+for bad in void_ratio fabric_xz; do
+  if "$ann" --carry "$bad" > /dev/null 2> "$out/error.txt"; then
+    echo "--carry $bad was accepted" >&2
+    exit 1
+  fi
+  grep -q -- "--carry.*'$bad'" "$out/error.txt"
+done
+if "$ann" --carry coordination_number --architecture gru8 > /dev/null 2> "$out/error.txt"; then
+  echo "--carry with a GRU was accepted" >&2
+  exit 1
+fi
+grep -q -- "--carry: a GRU carries its hidden state" "$out/error.txt"
 echo "ann_cli_test: ok"
