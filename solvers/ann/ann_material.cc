@@ -178,27 +178,16 @@ AnnMaterial::AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
                        "the model carries internal variables; a point needs the real model and a "
                        "reader of its state to start from");
     }
-    const std::vector<std::string>& names = options_.internal_variables.names;
-    for (const std::string& name : carried) {
-      const auto found = std::find(names.begin(), names.end(), name);
-      if (found == names.end()) {
-        throw InputError("internal_variables", "the model carries '" + name +
-                                                   "', which the reader does not read");
-      }
-      carried_columns_.push_back(static_cast<std::size_t>(found - names.begin()));
-    }
+    carried_reader_ = Narrowed(options_.internal_variables, carried, "internal_variables",
+                               "read by the reader of the real state, but the model carries it");
     initial_internal_variables_ = CarriedOf(*fallback_->InitialState());
   }
 }
 
 Eigen::VectorXd AnnMaterial::CarriedOf(const material::MaterialState& real_state) const {
-  Eigen::VectorXd carried(static_cast<Eigen::Index>(carried_columns_.size()));
-  if (carried_columns_.empty()) return carried;
-  const std::vector<double> values = options_.internal_variables.read(real_state);
-  for (std::size_t v = 0; v < carried_columns_.size(); ++v) {
-    carried[static_cast<Eigen::Index>(v)] = values.at(carried_columns_[v]);
-  }
-  return carried;
+  if (!carried_reader_.read) return Eigen::VectorXd();
+  const std::vector<double> values = carried_reader_.read(real_state);
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
 
 std::unique_ptr<material::MaterialState> AnnMaterial::InitialState() const {
@@ -218,10 +207,10 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
     for (int c = 0; c < 6; ++c) in.Get(state->accumulated_strain[c]);
     std::uint64_t carried = 0;
     if (!without_internal) in.Get(carried);
-    if (carried != carried_columns_.size()) {
+    if (carried != carried_reader_.names.size()) {
       throw InputError("state", "carries " + std::to_string(carried) +
                                     " internal variables, the model " +
-                                    std::to_string(carried_columns_.size()));
+                                    std::to_string(carried_reader_.names.size()));
     }
     state->internal_variables.resize(static_cast<Eigen::Index>(carried));
     for (Eigen::Index v = 0; v < state->internal_variables.size(); ++v) {

@@ -145,7 +145,7 @@ class AnnMaterial : public material::ConstitutiveModel {
   std::shared_ptr<const material::ConstitutiveModel> fallback_;
   AnnMaterialOptions options_;
   Matrix3 initial_stress_pa_ = Matrix3::Zero();
-  std::vector<std::size_t> carried_columns_;  // of the carried variables, in the reader's names
+  InternalVariables carried_reader_;  // options' reader narrowed to the carried variables
   Eigen::VectorXd initial_internal_variables_;
   // One copy of each distinct origin (the points of one depth share theirs).
   std::shared_ptr<const std::string> Intern(std::string bytes) const;

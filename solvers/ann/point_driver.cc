@@ -20,6 +20,30 @@ void DriverOptions::Validate(const std::string& field_prefix) const {
   }
 }
 
+InternalVariables Narrowed(const InternalVariables& all, const std::vector<std::string>& names,
+                           const std::string& field, const std::string& what) {
+  std::vector<std::size_t> columns;
+  for (const std::string& name : names) {
+    const auto found = std::find(all.names.begin(), all.names.end(), name);
+    if (found == all.names.end()) {
+      std::string known;
+      for (const std::string& read : all.names) known += (known.empty() ? "" : ", ") + read;
+      throw InputError(field, "'" + name + "' is not " + what + " (" + known + ")");
+    }
+    columns.push_back(static_cast<std::size_t>(found - all.names.begin()));
+  }
+  InternalVariables narrowed;
+  if (names.empty()) return narrowed;
+  narrowed.names = names;
+  narrowed.read = [read = all.read, columns](const material::MaterialState& state) {
+    const std::vector<double> values = read(state);
+    std::vector<double> chosen;
+    for (std::size_t column : columns) chosen.push_back(values.at(column));
+    return chosen;
+  };
+  return narrowed;
+}
+
 Matrix3 IncrementOf(const Vector6& strain_increment, const Matrix3& spin_increment) {
   return material::DisplacementGradientForStrain(material::VoigtToStrain(strain_increment)) +
          spin_increment;

@@ -51,6 +51,11 @@ struct InternalVariables {
   std::function<std::vector<double>(const material::MaterialState&)> read;
 };
 
+// `all` narrowed to `names`, in that order (no reader at all for no names). Throws
+// InputError(field, "'<name>' is not <what> (<the names all reads>)") for a name it does not read.
+InternalVariables Narrowed(const InternalVariables& all, const std::vector<std::string>& names,
+                           const std::string& field, const std::string& what);
+
 class MaterialPointDriver {
  public:
   // Starts from the model's InitialState() and the stress of a zero increment on it.

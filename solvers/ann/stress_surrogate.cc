@@ -21,16 +21,20 @@ namespace {
 constexpr int kInputs = 18;  // without carried internal variables
 constexpr int kOutputs = 6;  // d_sigma; the carried variables' increments follow
 
+std::string Joined(const std::vector<std::string>& names, const std::string& separator) {
+  std::string joined;
+  for (std::size_t k = 0; k < names.size(); ++k) joined += (k ? separator : "") + names[k];
+  return joined;
+}
+
 // Every input carries `carried` internal variables; InputError("inputs", ...) otherwise.
 void RequireCarried(const std::vector<SurrogateInput>& inputs,
                     const std::vector<std::string>& carried) {
   for (const SurrogateInput& input : inputs) {
     if (input.internal_variables.size() != static_cast<Eigen::Index>(carried.size())) {
-      std::string names;
-      for (const std::string& name : carried) names += (names.empty() ? "" : ", ") + name;
       throw InputError("inputs", "each point must carry the network's " +
                                      std::to_string(carried.size()) + " internal variables (" +
-                                     names + "), one carries " +
+                                     Joined(carried, ", ") + "), one carries " +
                                      std::to_string(input.internal_variables.size()));
     }
   }
@@ -87,12 +91,6 @@ Eigen::VectorXd CarriedBefore(const StrainHistory& history, const std::vector<st
   Eigen::VectorXd carried(static_cast<Eigen::Index>(columns.size()));
   for (std::size_t v = 0; v < columns.size(); ++v) carried[v] = values.at(columns[v]);
   return carried;
-}
-
-std::string Joined(const std::vector<std::string>& names, const std::string& separator) {
-  std::string joined;
-  for (std::size_t k = 0; k < names.size(); ++k) joined += (k ? separator : "") + names[k];
-  return joined;
 }
 
 // Adam's learning rate halved at 50, 75 and 90 % of the epochs.

@@ -148,27 +148,7 @@ ann::InternalVariables RveFabricVariables() {
 
 ann::InternalVariables RveVariables(const std::vector<std::string>& names,
                                    const std::string& field) {
-  const ann::InternalVariables all = RveFabricVariables();
-  std::vector<std::size_t> columns;
-  for (const std::string& name : names) {
-    const auto found = std::find(all.names.begin(), all.names.end(), name);
-    if (found == all.names.end()) {
-      std::string known;
-      for (const std::string& recorded : all.names) known += (known.empty() ? "" : ", ") + recorded;
-      throw InputError(field, "'" + name + "' is not a variable of the RVE's state (" + known + ")");
-    }
-    columns.push_back(static_cast<std::size_t>(found - all.names.begin()));
-  }
-  ann::InternalVariables narrowed;
-  if (names.empty()) return narrowed;
-  narrowed.names = names;
-  narrowed.read = [read = all.read, columns](const material::MaterialState& state) {
-    const std::vector<double> values = read(state);
-    std::vector<double> chosen;
-    for (std::size_t column : columns) chosen.push_back(values[column]);
-    return chosen;
-  };
-  return narrowed;
+  return ann::Narrowed(RveFabricVariables(), names, field, "a variable of the RVE's state");
 }
 
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
