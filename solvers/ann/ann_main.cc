@@ -75,10 +75,15 @@ struct CommandLine {
   double walk_share = 0;  // > 0: the random walks' share of the loss
   std::uint64_t training_seed = 1;
   bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
+  std::vector<unsigned> packing_seeds;  // held-out paths also run on these packings (RVE spread)
   std::vector<std::string> carried;  // internal variables the MLPs carry (implies record_fabric)
   int threads = 2;
   std::string out;
 };
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 // The recipe's paths run on the RVE, with a progress line and each early stop named.
 std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
@@ -97,6 +102,38 @@ std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
     }
   }
   return histories;
+}
+
+// The floor under a held-out error: the same held-out paths run on the soil's RVE packed from
+// other seeds (RveNumerics::seed), their stresses measured against the study's packing's as a
+// surrogate's replay is (ReplayError: sum |sigma_other - sigma| / sum |sigma| over the steps both
+// reached). A surrogate of the soil cannot be told apart from its RVE closer than its packings are
+// from one another.
+void PrintPackingSpread(const CommandLine& line, const SoilParameters& soil,
+                        const tiers::FeDeOptions& preset,
+                        const std::vector<tiers::NamedLabPath>& held_out_paths,
+                        const std::vector<StrainHistory>& held_out) {
+  std::printf("packing_seed,");
+  for (const tiers::NamedLabPath& path : held_out_paths) std::printf("%s %%,", path.name.c_str());
+  std::printf("generation_s\n");
+  for (unsigned seed : line.packing_seeds) {
+    dem::rve::RveNumerics numerics = preset.numerics;
+    numerics.seed = seed;
+    const auto start = std::chrono::steady_clock::now();
+    const auto other_rve =
+        dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(soil, numerics, "soil"));
+    const std::vector<StrainHistory> others =
+        RunPaths(*other_rve, held_out_paths, line.threads, "other packing's held-out", {});
+    std::printf("%u,", seed);
+    for (std::size_t k = 0; k < held_out.size(); ++k) {
+      const std::size_t steps = std::min(held_out[k].steps(), others[k].steps());
+      const std::vector<Vector6> other_stresses(others[k].stresses_pa.begin(),
+                                                others[k].stresses_pa.begin() + steps);
+      std::printf("%.2f,", 100 * ReplayError(other_stresses, held_out[k]));
+    }
+    std::printf("%.1f\n", Since(start));
+    std::fflush(stdout);
+  }
 }
 
 MlpArchitecture ParseArchitecture(const std::string& text) {
@@ -192,10 +229,6 @@ TractionRequest RigRequest(const CommandLine& line, double load_n) {
   request.wheel_load_n = load_n;
   request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
   return request;
-}
-
-double Since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // fe-de curves by load, computed once each (the rig run's is the recorded run's).
@@ -478,6 +511,9 @@ int Run(const CommandLine& line) {
       RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
   const double generation_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!line.packing_seeds.empty()) {
+    PrintPackingSpread(line, entry->parameters, preset, held_out_paths, held_out);
+  }
   std::vector<StrainHistory> training_all = training;
   std::vector<StrainHistory> held_out_all = held_out;
   std::vector<std::string> held_out_names;
@@ -627,6 +663,12 @@ int main(int argc, char** argv) {
                  "(coordination_number, solid_fraction; stress_surrogate.h); the histories record "
                  "them")
       ->type_name("NAME");
+  app.add_option("--packing-seeds", line.packing_seeds,
+                 "also run the held-out paths on the soil's RVE packed from these seeds (the "
+                 "study's packing is the preset's, seed 1) and print their stresses' difference "
+                 "from the study's packing's, measured as a replay's error: the RVE's own spread, "
+                 "the floor under a held-out error")
+      ->check(CLI::PositiveNumber);
   app.add_option("--validate-load-n", line.validate_loads_n,
                  "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
                  "fe-de");

@@ -5,7 +5,8 @@
 # with their provenance, the fine-tuned one naming its base. The first run records the RVE's
 # fabric (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts.
 # A network carrying the coordination number (--carry) is trained; what cannot be carried is
-# refused by name.
+# refused by name. The RVE's own spread (--packing-seeds): the study's packing (seed 1) against
+# itself is 0 on every held-out path, another packing is not.
 set -eu
 ann="$1"
 out="$2"
@@ -70,4 +71,20 @@ if "$ann" --carry coordination_number --architecture gru8 > /dev/null 2> "$out/e
   exit 1
 fi
 grep -q -- "--carry: a GRU carries its hidden state" "$out/error.txt"
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --steps 5 --walks 0 \
+  --architecture 8 --epochs 1 --threads 1 --packing-seeds 1 2 > "$out/spread.csv" \
+  2> "$out/spread_progress.txt"
+grep -q '^packing_seed,triaxial.*,generation_s$' "$out/spread.csv"
+/usr/bin/python3 - "$out/spread.csv" <<'PYTHON'
+import sys
+rows = {line.split(',')[0]: [float(x) for x in line.strip().split(',')[1:-1]]
+        for line in open(sys.argv[1]) if line[:2] in ('1,', '2,')}
+assert len(rows['1']) == 7 and all(x == 0 for x in rows['1']), rows
+assert len(rows['2']) == 7 and all(x > 0 for x in rows['2']), rows
+PYTHON
+if "$ann" --packing-seeds 0 > /dev/null 2> "$out/error.txt"; then
+  echo "--packing-seeds 0 was accepted" >&2
+  exit 1
+fi
+grep -q -- "--packing-seeds" "$out/error.txt"
 echo "ann_cli_test: ok"
