@@ -2,7 +2,7 @@
 //
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
-//                       [--fe-de-budget-s S]
+//                       [--fe-de-budget-s S] [--carry coordination_number]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
   int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
+  std::vector<std::string> carried;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
@@ -80,6 +81,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
       ->capture_default_str();
+  app.add_option("--carry", carried,
+                 "internal variables of the RVE the MLPs carry (coordination_number, "
+                 "solid_fraction; stress_surrogate.h)");
   app.add_option("--wheel-load-n", load_n, "the rig wheel's load, N")->capture_default_str();
   app.add_option("--fe-de-budget-s", fe_de_budget_s,
                  "> 0: run fe-de this long and project its whole time from its pace")
@@ -108,6 +112,7 @@ int main(int argc, char** argv) {
     for (std::string width; std::getline(widths, width, 'x');) {
       recipe.architecture.hidden_widths.push_back(std::stoi(width));
     }
+    recipe.architecture.carried_variables = carried;
     const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(preset);
     std::printf("# gonogo-bench-fe-ann: soil %s, preset %s, %s, %d epochs\n", soil_name.c_str(),
                 preset.c_str(), recipe.architecture.Describe().c_str(), epochs);
@@ -133,7 +138,7 @@ int main(int argc, char** argv) {
     // The network, batched.
     std::vector<ann::SurrogateInput> pool;
     for (const ann::StrainHistory& history : trained.training) {
-      for (const ann::SurrogateInput& input : ann::InputsOf(history)) pool.push_back(input);
+      for (const ann::SurrogateInput& input : ann::InputsOf(history, carried)) pool.push_back(input);
     }
     std::printf("batch,fused_us_per_point,module_us_per_point,fused_evals_per_s,"
                 "ensemble_us_per_point,ensemble_tangent_us_per_point\n");
