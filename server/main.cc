@@ -142,6 +142,17 @@ Options Parse(int argc, char** argv) {
                  "wall seconds between checkpoints of a running fe-de curve (FE state and every "
                  "RVE, under DATA_DIR/checkpoints; a restarted server resumes from them)")
       ->check(CLI::Range(0.0, 86400.0));
+  app.add_option("--fe-ann-distance-threshold", o.tier_options.fe_ann_distance_threshold,
+                 "fe-ann: Mahalanobis distance from a model's training inputs beyond which a point "
+                 "is flagged (and falls back to its RVE); 0: each model's own (gonogo models)")
+      ->check(CLI::Range(0.0, 1e12));
+  app.add_option("--fe-ann-spread-threshold", o.tier_options.fe_ann_spread_threshold,
+                 "fe-ann: relative spread of a model's members beyond which a point is flagged; "
+                 "0: each model's own")
+      ->check(CLI::Range(0.0, 1e12));
+  app.add_flag("--fe-ann-no-fallback{false}", o.tier_options.fe_ann_fallback,
+               "fe-ann: a flagged point stays on the network (counted in the run's provenance) "
+               "instead of falling back to its RVE");
   app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
                "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
   app.add_option("--token-file", o.token_file,

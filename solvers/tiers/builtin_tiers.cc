@@ -22,6 +22,9 @@ void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& opti
   registry.Register(std::make_unique<tiers::FeDeTier>(fe_de));
   tiers::FeAnnOptions fe_ann;
   fe_ann.fe_de = fe_de;
+  fe_ann.distance_threshold = options.fe_ann_distance_threshold;
+  fe_ann.spread_threshold = options.fe_ann_spread_threshold;
+  fe_ann.fallback_enabled = options.fe_ann_fallback;
   std::shared_ptr<const tiers::SurrogateModelSource> models;
   if (options.models_dir.empty()) {
     models = std::make_shared<tiers::ListedSurrogateModels>(

@@ -16,6 +16,12 @@ struct BuiltinTierOptions {
   // The fe-ann tier's model registry (surrogate_registry.h: <data dir>/models); empty: no models
   // (every fe-ann request is then refused with the command that trains one).
   std::string models_dir;
+  // The fe-ann tier's guard (fe_ann_tier.h FeAnnOptions): thresholds that flag a point (0: each
+  // model's own) and whether a flagged point falls back to its RVE. Part of the tier's version,
+  // so curves computed otherwise are cached apart.
+  double fe_ann_distance_threshold = 0;
+  double fe_ann_spread_threshold = 0;
+  bool fe_ann_fallback = true;
 };
 
 // Throws InputError naming the option for a bad value.

@@ -4,7 +4,10 @@
 // `gonogo-ann --register` trains one on the soil's RVE into the server's data directory;
 // `gonogo models` lists it; the curve is then computed on the worker rank with it (the model's id
 // crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; an unknown
-// model (for a curve or a map), or a model given to another tier, is refused by field.
+// model (for a curve or a map), or a model given to another tier, is refused by field. A server
+// started with the guard set otherwise (--fe-ann-no-fallback, --fe-ann-distance-threshold) names
+// it in the tier's version and computes the curve anew under its own key; a negative threshold
+// is refused by flag.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -106,6 +109,29 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_EQ(bad_map.exit_code, 3) << bad_map.out;
   EXPECT_NE(bad_map.out.find("surrogate_model"), std::string::npos) << bad_map.out;
   EXPECT_EQ(server.Terminate(), 0);
+
+  ServerProcess guarded(data,
+                        {"--fe-de-preset", "tiny", "--fe-ann-no-fallback",
+                         "--fe-ann-distance-threshold", "30"},
+                        2);
+  const CliRun guarded_tiers = Gonogo(guarded.endpoint(), "tiers");
+  ASSERT_EQ(guarded_tiers.exit_code, 0) << guarded_tiers.out;
+  EXPECT_NE(guarded_tiers.out.find("fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
+      << guarded_tiers.out;
+  const CliRun unguarded = Gonogo(guarded.endpoint(), std::string(kWheel) + " --model " + id);
+  ASSERT_EQ(unguarded.exit_code, 0) << unguarded.out;
+  EXPECT_NE(unguarded.out.find("surrogate model " + id + ", computed by rank 1"),
+            std::string::npos)
+      << "not the default guard's cached curve: " << unguarded.out;
+  EXPECT_EQ(guarded.Terminate(), 0);
+}
+
+TEST(FeAnnService, RefusesANegativeThreshold) {
+  ScratchDir dir("fe-ann-service-flags");
+  const CliRun refused = RunShell(BinaryDir() + "/server/gonogo-server --data-dir " +
+                                  dir.path().string() + " --fe-ann-distance-threshold -1");
+  EXPECT_EQ(refused.exit_code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("--fe-ann-distance-threshold"), std::string::npos) << refused.out;
 }
 
 }  // namespace
