@@ -150,9 +150,14 @@ Options Parse(int argc, char** argv) {
                  "fe-ann: relative spread of a model's members beyond which a point is flagged; "
                  "0: each model's own")
       ->check(CLI::Range(0.0, 1e12));
+  auto* fe_ann_return = app.add_option("--fe-ann-return-after-steps", o.tier_options.fe_ann_return_after_steps,
+                 "fe-ann: a fallen-back point returns to the network after this many FE steps in "
+                 "a row that would not have been flagged; 0: it stays on its RVE")
+      ->check(CLI::Range(0, 1000000));
   app.add_flag("--fe-ann-no-fallback{false}", o.tier_options.fe_ann_fallback,
                "fe-ann: a flagged point stays on the network (counted in the run's provenance) "
-               "instead of falling back to its RVE");
+               "instead of falling back to its RVE")
+      ->excludes(fe_ann_return);
   app.add_flag("--diagnostic-tiers", o.diagnostic_tiers,
                "also serve the diagnostic tiers (rank-group, failure and slow-curve probes)");
   app.add_option("--token-file", o.token_file,

@@ -75,6 +75,7 @@ struct CommandLine {
   double walk_share = 0;  // > 0: the random walks' share of the loss
   std::uint64_t training_seed = 1;
   bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
+  int return_after_steps = 0;  // --validate-load-n: fallen-back points return to the network
   std::vector<unsigned> packing_seeds;  // held-out paths also run on these packings (RVE spread)
   std::vector<std::string> carried;  // internal variables the MLPs carry (implies record_fabric)
   int threads = 2;
@@ -248,6 +249,7 @@ void Validate(const CommandLine& line, const std::string& model_directory,
   record.fe_de_preset = line.preset;
   tiers::FeAnnOptions options;
   options.fe_de = tiers::FeDeOptions::Preset(line.preset);
+  options.return_after_steps = line.return_after_steps;
   const tiers::FeAnnTier fe_ann(
       options, std::make_shared<tiers::ListedSurrogateModels>(
                    std::vector<tiers::SurrogateModelRecord>{record}));
@@ -267,10 +269,11 @@ void Validate(const CommandLine& line, const std::string& model_directory,
     const auto& d = reference.run.curve.points;
     const tiers::CurveDifference worst =
         tiers::WorstDifference(ann.curve, reference.run.curve, request);
-    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%.2f,%.2f,%.2f\n",
+    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%lld,%.2f,%.2f,%.2f\n",
                 architecture.c_str(), load_n, reference.seconds, seconds,
                 reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
-                ann.fallbacks, static_cast<long long>(ann.stress_returns),
+                ann.fallbacks, static_cast<long long>(ann.returns),
+                static_cast<long long>(ann.stress_returns),
                 100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
                 100 * worst.sinkage_over_r);
     for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
@@ -357,7 +360,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                          : line.out + "/" + name;
     if (line.out.empty()) ensemble.Save(directory);
     std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
-                "fallback_s,fallbacks,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+                "fallback_s,fallbacks,returns,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
     Validate(line, directory, name, study.soil, study.references);
     if (line.out.empty()) std::filesystem::remove_all(directory);
   }
@@ -663,6 +666,10 @@ int main(int argc, char** argv) {
                  "(coordination_number, solid_fraction; stress_surrogate.h); the histories record "
                  "them")
       ->type_name("NAME");
+  app.add_option("--return-after-steps", line.return_after_steps,
+                 "--validate-load-n's fe-ann runs: a fallen-back point returns to the network "
+                 "after this many FE steps in a row its ensemble would not have flagged (0: never)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--packing-seeds", line.packing_seeds,
                  "also run the held-out paths on the soil's RVE packed from these seeds (the "
                  "study's packing is the preset's, seed 1) and print their stresses' difference "

@@ -11,8 +11,10 @@
 namespace gonogo::ann {
 namespace {
 
-constexpr char kStateTag[9] = "GNGANN03";
-constexpr char kStateTagWithoutInternalVariables[9] = "GNGANN02";  // read only
+constexpr char kStateTag[9] = "GNGANN04";
+// Read only: without the return's count (03), and without internal variables either (02).
+constexpr char kStateTagWithoutReturn[9] = "GNGANN03";
+constexpr char kStateTagWithoutInternalVariables[9] = "GNGANN02";
 
 std::shared_ptr<const IncrementNode> Append(std::shared_ptr<const IncrementNode> history,
                                             const Matrix3& increment) {
@@ -34,6 +36,7 @@ std::unique_ptr<AnnState> Advance(const AnnState& committed, const Matrix3& incr
   next->history = Append(committed.history, increment);
   next->flags = committed.flags;
   next->fell_back_at_step = committed.fell_back_at_step;
+  next->unflagged_on_fallback = committed.unflagged_on_fallback;
   next->origin = committed.origin;
   return next;
 }
@@ -87,6 +90,16 @@ std::int64_t FallbackLog::stress_returns() const {
   return stress_returns_;
 }
 
+void FallbackLog::RecordReturn() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++returns_;
+}
+
+std::int64_t FallbackLog::returns() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return returns_;
+}
+
 void FallbackLog::RecordFallbackSeconds(double seconds) {
   std::lock_guard<std::mutex> lock(mutex_);
   fallback_seconds_ += seconds;
@@ -136,6 +149,7 @@ std::unique_ptr<material::MaterialState> AnnState::Clone() const {
   copy->flags = flags;
   copy->fallback = fallback ? fallback->Clone() : nullptr;
   copy->fell_back_at_step = fell_back_at_step;
+  copy->unflagged_on_fallback = unflagged_on_fallback;
   copy->origin = origin;
   return copy;
 }
@@ -149,6 +163,7 @@ std::string AnnState::Serialize() const {
   for (Eigen::Index v = 0; v < internal_variables.size(); ++v) out.Put(internal_variables[v]);
   out.Put(flags);
   out.Put(fell_back_at_step);
+  out.Put(unflagged_on_fallback);
   const std::vector<Matrix3> increments = Increments();
   out.Put(static_cast<std::uint64_t>(increments.size()));
   for (const Matrix3& increment : increments) out.Put(increment);
@@ -202,7 +217,11 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
   try {
     ByteReader in(bytes);
     const bool without_internal = bytes.compare(0, 8, kStateTagWithoutInternalVariables) == 0;
-    in.ExpectTag(without_internal ? kStateTagWithoutInternalVariables : kStateTag);
+    const bool without_return =
+        without_internal || bytes.compare(0, 8, kStateTagWithoutReturn) == 0;
+    in.ExpectTag(without_internal ? kStateTagWithoutInternalVariables
+                 : without_return ? kStateTagWithoutReturn
+                                  : kStateTag);
     in.Get(state->stress_pa);
     for (int c = 0; c < 6; ++c) in.Get(state->accumulated_strain[c]);
     std::uint64_t carried = 0;
@@ -218,6 +237,7 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
     }
     in.Get(state->flags);
     in.Get(state->fell_back_at_step);
+    if (!without_return) in.Get(state->unflagged_on_fallback);
     std::uint64_t steps = 0;
     in.Get(steps);
     if (steps > bytes.size() / 72) throw InputError("state", "step count larger than the bytes");
@@ -299,8 +319,34 @@ material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const M
   next->flags = committed.flags + 1;
   next->fallback = std::move(response.state);
   next->fell_back_at_step = committed.steps();
+  next->unflagged_on_fallback = 0;
   response.state = std::move(next);
   return response;
+}
+
+std::vector<bool> AnnMaterial::WouldFlag(const std::vector<material::PointIncrement>& increments,
+                                         const std::vector<std::size_t>& on_fallback) const {
+  std::vector<bool> flags(on_fallback.size(), true);
+  if (options_.return_after_steps <= 0) return flags;
+  std::vector<SurrogateInput> inputs;
+  std::vector<std::size_t> asked;  // indices into on_fallback
+  for (std::size_t k = 0; k < on_fallback.size(); ++k) {
+    const std::size_t i = on_fallback[k];
+    const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
+    const material::IncrementKinematics split =
+        material::HughesWinget(increments[i].displacement_gradient_increment);
+    if (!split.ok()) continue;  // the real model answers (or refuses) it; no return on it
+    SurrogateInput input;
+    input.strain_increment = material::StrainToVoigt(split.strain_increment);
+    input.stress_pa = material::StressToVoigt(committed.stress_pa);
+    input.accumulated_strain = committed.accumulated_strain;
+    input.internal_variables = CarriedOf(*committed.fallback);
+    inputs.push_back(input);
+    asked.push_back(k);
+  }
+  const std::vector<EnsembleAnswer> answers = ensemble_->Answer(inputs, false);
+  for (std::size_t a = 0; a < asked.size(); ++a) flags[asked[a]] = answers[a].out_of_distribution;
+  return flags;
 }
 
 std::vector<material::PointResponse> AnnMaterial::Update(
@@ -377,6 +423,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       batch.push_back({increments[i].displacement_gradient_increment, committed.fallback.get()});
     }
     std::vector<material::PointResponse> real = fallback_->Update(batch, want_tangent);
+    const std::vector<bool> would_flag = WouldFlag(increments, on_fallback);
     for (std::size_t k = 0; k < on_fallback.size(); ++k) {
       const std::size_t i = on_fallback[k];
       const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
@@ -386,6 +433,16 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       std::unique_ptr<AnnState> next = Advance(committed, increment, StrainIncrementOf(increment),
                                                responses[i].stress_pa);
       next->fallback = std::move(responses[i].state);
+      if (options_.return_after_steps > 0) {
+        next->unflagged_on_fallback = would_flag[k] ? 0 : committed.unflagged_on_fallback + 1;
+        if (next->unflagged_on_fallback >= options_.return_after_steps) {
+          // Back to the network, from where the real model is now.
+          next->internal_variables = CarriedOf(*next->fallback);
+          next->fallback.reset();
+          next->unflagged_on_fallback = 0;
+          log_->RecordReturn();
+        }
+      }
       responses[i].state = std::move(next);
     }
   }

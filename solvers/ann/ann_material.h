@@ -4,12 +4,20 @@
 // A point's state: its stress, the strain accumulated since its start (the network's history
 // input), the displacement-gradient increments it has taken (so that a fallback can replay
 // them), and, once it has fallen back, the real model's state, which answers for it from then on
-// (a point does not return to the network: its history is now the real model's).
+// unless the point is allowed to return (below).
 //
 // Fallback: when the ensemble flags a point's increment (surrogate_ensemble.h) and the fallback
 // is enabled, a fresh state of the real model replays the point's increments from the start and
 // then takes this one; the point's stress jumps to what the real model says its history gives.
-// With the fallback disabled, the network answers anyway and the point counts the flag. A
+// With the fallback disabled, the network answers anyway and the point counts the flag.
+//
+// Return (AnnMaterialOptions::return_after_steps > 0): a fallen-back point's every increment is
+// also put to the ensemble, as the network's input it would have been (the real model's stress,
+// the accumulated strain, the carried variables read from the real model's state). After that
+// many increments in a row that the ensemble would not have flagged, the point goes back to the
+// network from the real model's stress and variables, and the real state is dropped; flagged
+// again, it replays its whole history once more. A fallback then costs the steps it is out, not
+// the rest of the run. A
 // committed state tells whether and when its point fell back (fell_back_at_step), which is what a
 // curve reports; the FallbackLog has every fallback and unanswered flag the material made,
 // including those of trial updates its caller then discarded (their cost, not their count of
@@ -48,6 +56,9 @@ struct AnnMaterialOptions {
   // Reads the real model's internal variables (tiers::RveFabricVariables for an RVE): required,
   // with the real model, when the ensemble carries any.
   InternalVariables internal_variables;
+  // A fallen-back point returns to the network after this many increments in a row the ensemble
+  // would not have flagged; 0: never (it stays on the real model).
+  int return_after_steps = 0;
 };
 
 // What the points of one material did, for a run's provenance. Thread-safe.
@@ -63,12 +74,14 @@ class FallbackLog {
   void RecordNetworkCall(double seconds, std::int64_t points);
   void RecordStressReturns(std::int64_t points);  // answers SurrogateEnsemble::Admissible changed
   void RecordFallbackSeconds(double seconds);  // replays and points answered by the real model
+  void RecordReturn();  // a fallen-back point went back to the network
   std::vector<Event> fallbacks() const;
   std::int64_t unanswered_flags() const;
   double network_seconds() const;
   std::int64_t network_point_updates() const;  // point updates the ensemble answered
   std::int64_t stress_returns() const;
   double fallback_seconds() const;
+  std::int64_t returns() const;
 
  private:
   mutable std::mutex mutex_;
@@ -78,6 +91,7 @@ class FallbackLog {
   std::int64_t network_point_updates_ = 0;
   std::int64_t stress_returns_ = 0;
   double fallback_seconds_ = 0;
+  std::int64_t returns_ = 0;
 };
 
 // The increments a point has taken, newest first, shared between a state and the states made
@@ -101,9 +115,11 @@ class AnnState : public material::MaterialState {
   Eigen::VectorXd internal_variables;            // the ensemble's carried ones
   std::shared_ptr<const IncrementNode> history;  // dH taken, for a fallback's replay
   std::int64_t flags = 0;                        // increments the ensemble flagged
-  // Set once the point has fallen back: the real model's state answers from then on.
+  // Set while the point is fallen back: the real model's state answers for it.
   std::unique_ptr<material::MaterialState> fallback;
-  std::int64_t fell_back_at_step = -1;
+  std::int64_t fell_back_at_step = -1;  // the steps it had taken at its latest fallback
+  // On the real model: its increments in a row the ensemble would not have flagged (the return).
+  std::int64_t unflagged_on_fallback = 0;
   // The real model's state the point started from (its bytes, shared by the points that started
   // alike); null: the real model's fresh state.
   std::shared_ptr<const std::string> origin;
@@ -138,6 +154,10 @@ class AnnMaterial : public material::ConstitutiveModel {
  private:
   material::PointResponse FallBack(const AnnState& committed, const Matrix3& increment,
                                    bool want_tangent) const;
+  // Whether the ensemble would flag each fallen-back point's increment (all true with the return
+  // off), in one batched call.
+  std::vector<bool> WouldFlag(const std::vector<material::PointIncrement>& increments,
+                              const std::vector<std::size_t>& on_fallback) const;
   // The carried internal variables of a state of the real model.
   Eigen::VectorXd CarriedOf(const material::MaterialState& real_state) const;
 

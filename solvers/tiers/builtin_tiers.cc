@@ -25,6 +25,7 @@ void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& opti
   fe_ann.distance_threshold = options.fe_ann_distance_threshold;
   fe_ann.spread_threshold = options.fe_ann_spread_threshold;
   fe_ann.fallback_enabled = options.fe_ann_fallback;
+  fe_ann.return_after_steps = options.fe_ann_return_after_steps;
   std::shared_ptr<const tiers::SurrogateModelSource> models;
   if (options.models_dir.empty()) {
     models = std::make_shared<tiers::ListedSurrogateModels>(

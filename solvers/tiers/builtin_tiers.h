@@ -22,6 +22,7 @@ struct BuiltinTierOptions {
   double fe_ann_distance_threshold = 0;
   double fe_ann_spread_threshold = 0;
   bool fe_ann_fallback = true;
+  int fe_ann_return_after_steps = 0;  // 0: a fallen-back point stays on its RVE
 };
 
 // Throws InputError naming the option for a bad value.

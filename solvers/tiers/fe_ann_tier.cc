@@ -25,6 +25,9 @@ void FeAnnOptions::Validate(const std::string& p) const {
           "must be >= 0 (0: the model's own)");
   Require(std::isfinite(spread_threshold) && spread_threshold >= 0, p + "spread_threshold",
           "must be >= 0 (0: the model's own)");
+  Require(return_after_steps >= 0, p + "return_after_steps", "must be >= 0 (0: never)");
+  Require(return_after_steps == 0 || fallback_enabled, p + "return_after_steps",
+          "a point returns from its fallback, which is off");
 }
 
 FeAnnTier::FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelSource> models)
@@ -43,6 +46,9 @@ std::string FeAnnTier::Version() const {
     std::snprintf(text, sizeof text, "-d%.4g-s%.4g", options_.distance_threshold,
                   options_.spread_threshold);
     version += text;
+  }
+  if (options_.return_after_steps > 0) {
+    version += "-return" + std::to_string(options_.return_after_steps);
   }
   return version;
 }
@@ -125,6 +131,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
 
   ann::AnnMaterialOptions material_options;
   material_options.fallback_enabled = options_.fallback_enabled;
+  material_options.return_after_steps = options_.return_after_steps;
   // What a model carrying internal variables takes from a point's settled RVE.
   material_options.internal_variables = RveFabricVariables();
   std::shared_ptr<const ann::AnnMaterial> material;
@@ -158,6 +165,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     report.network_point_updates = log.network_point_updates();
     report.stress_returns = log.stress_returns();
     report.fallback_seconds = log.fallback_seconds();
+    report.returns = log.returns();
   }
   return report;
 }

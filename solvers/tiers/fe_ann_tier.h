@@ -10,7 +10,8 @@
 // PreconditionError naming the command that trains one.
 //
 // A point starts as its fe-de RVE would (the template settled at the stress of its depth) and,
-// when flagged, replays its increments on that RVE (the fallback) and stays on it. The curve's
+// when flagged, replays its increments on that RVE (the fallback) and stays on it, or, with
+// FeAnnOptions::return_after_steps, returns to the network once back inside. The curve's
 // figures (AnnRunReport) say how many points fell back, at which step, and where the time went.
 #pragma once
 
@@ -53,6 +54,9 @@ struct FeAnnOptions {
   // Flag thresholds (surrogate_ensemble.h); 0: the model's own.
   double distance_threshold = 0;
   double spread_threshold = 0;
+  // A fallen-back point returns to the network after this many increments in a row the ensemble
+  // would not have flagged (ann_material.h); 0: it stays on its RVE.
+  int return_after_steps = 0;
   void Validate(const std::string& field_prefix) const;
 };
 
@@ -71,6 +75,7 @@ struct AnnRunReport : FeDeRunReport {
   // the model's tensile limit or returned onto its cone), trial updates included.
   std::int64_t stress_returns = 0;
   double fallback_seconds = 0;        // replays and points on the RVE
+  std::int64_t returns = 0;           // fallen-back points that went back to the network
   double model_load_seconds = 0;
 };
 

@@ -3,6 +3,7 @@
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
 //                       [--fe-de-budget-s S] [--carry coordination_number]
+//                       [--return-after-steps N]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -70,6 +71,7 @@ int main(int argc, char** argv) {
   int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
   std::vector<std::string> carried;
+  int return_after_steps = 0;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
@@ -80,6 +82,10 @@ int main(int argc, char** argv) {
                  "rotated copies of each training path added to the training set")
       ->capture_default_str();
   app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
+      ->capture_default_str();
+  app.add_option("--return-after-steps", return_after_steps,
+                 "a fallen-back point returns to the network after this many unflagged FE steps "
+                 "(0: never)")
       ->capture_default_str();
   app.add_option("--carry", carried,
                  "internal variables of the RVE the MLPs carry (coordination_number, "
@@ -172,6 +178,7 @@ int main(int argc, char** argv) {
     options.fe_de = fe_de;
     options.distance_threshold = distance_threshold;
     options.spread_threshold = spread_threshold;
+    options.return_after_steps = return_after_steps;
     const tiers::FeAnnTier fe_ann(options, std::make_shared<tiers::ListedSurrogateModels>(
                                                std::vector<tiers::SurrogateModelRecord>{record}));
     TractionRequest request;
@@ -207,13 +214,13 @@ int main(int argc, char** argv) {
     const double rest_s =
         ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
     std::printf("fe-ann curve: %.2f s wall (%.1fx%s): network %.2f s (%lld point updates, %.1f us "
-                "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s, "
+                "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s (%lld returned), "
                 "model load %.3f s, FE and contact %.2f s; peak RSS %.0f MB\n",
                 ann_s, de_s / ann_s, fe_de_budget_s > 0 ? " of the projection" : "",
                 ann.network_seconds, static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
                 static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
-                ann.model_load_seconds, rest_s, PeakRssMb());
+                static_cast<long long>(ann.returns), ann.model_load_seconds, rest_s, PeakRssMb());
     if (fe_de_budget_s > 0) {
       std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
                   "sinkage_m\n");

@@ -6,8 +6,8 @@
 // crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; an unknown
 // model (for a curve or a map), or a model given to another tier, is refused by field. A server
 // started with the guard set otherwise (--fe-ann-no-fallback, --fe-ann-distance-threshold) names
-// it in the tier's version and computes the curve anew under its own key; a negative threshold
-// is refused by flag.
+// it in the tier's version and computes the curve anew under its own key; a negative threshold,
+// and a return from a fallback that is off, are refused by flag.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -126,12 +126,17 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_EQ(guarded.Terminate(), 0);
 }
 
-TEST(FeAnnService, RefusesANegativeThreshold) {
+TEST(FeAnnService, RefusesAGuardItCannotKeep) {
   ScratchDir dir("fe-ann-service-flags");
   const CliRun refused = RunShell(BinaryDir() + "/server/gonogo-server --data-dir " +
                                   dir.path().string() + " --fe-ann-distance-threshold -1");
   EXPECT_EQ(refused.exit_code, 2) << refused.out;
   EXPECT_NE(refused.out.find("--fe-ann-distance-threshold"), std::string::npos) << refused.out;
+  const CliRun no_return = RunShell(BinaryDir() + "/server/gonogo-server --data-dir " +
+                                    dir.path().string() +
+                                    " --fe-ann-no-fallback --fe-ann-return-after-steps 10");
+  EXPECT_EQ(no_return.exit_code, 2) << no_return.out;
+  EXPECT_NE(no_return.out.find("--fe-ann-return-after-steps"), std::string::npos) << no_return.out;
 }
 
 }  // namespace

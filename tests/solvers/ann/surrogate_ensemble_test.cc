@@ -363,6 +363,86 @@ TEST(AnnMaterial, StatesSaveAndRestoreOnAndOffTheNetwork) {
   EXPECT_THROW(ann.RestoreState("not a state"), InputError);
 }
 
+// With the return on, a point that fell back goes back to the network once the ensemble would not
+// have flagged its increments `return_after_steps` times in a row: until then the soil answers
+// (its stress bit for bit the soil's along the same increments), from then the network, starting
+// from the soil's stress. With the return off the point stays on the soil. A state half-way to
+// its return saves and restores with its count; a state of the format before the count reads.
+TEST(AnnMaterial, AFallenBackPointReturnsToTheNetworkOnceBackInside) {
+  Matrix3 increment = Matrix3::Zero();
+  increment(2, 2) = -1e-4;
+  increment(0, 2) = 2e-4;
+  std::vector<Matrix3> increments(5, increment);
+  increments.push_back(increment * 40);  // leaves the envelope
+  for (int s = 0; s < 6; ++s) increments.push_back(increment * 0.5);
+  struct Walked {
+    std::vector<std::unique_ptr<material::MaterialState>> states;  // after each increment
+    std::vector<Matrix3> stresses;
+  };
+  const auto walk = [&](const material::ConstitutiveModel& model) {
+    Walked walked;
+    std::unique_ptr<material::MaterialState> state = model.InitialState();
+    for (const Matrix3& step : increments) {
+      std::vector<material::PointResponse> answer = model.Update({{step, state.get()}}, false);
+      EXPECT_EQ(answer[0].status, material::UpdateStatus::kOk) << answer[0].reason;
+      if (answer[0].status != material::UpdateStatus::kOk) break;
+      state = std::move(answer[0].state);
+      walked.stresses.push_back(answer[0].stress_pa);
+      walked.states.push_back(state->Clone());
+    }
+    return walked;
+  };
+  const Walked soil = walk(Soil());
+  AnnMaterialOptions returning;
+  returning.return_after_steps = 3;
+  const AnnMaterial ann(SharedEnsemble(), SharedSoil(), returning);
+  const Walked on_ann = walk(ann);
+  ASSERT_EQ(on_ann.states.size(), increments.size());
+  const auto ann_state = [&](std::size_t s) -> const AnnState& {
+    return static_cast<const AnnState&>(*on_ann.states[s]);
+  };
+  ASSERT_EQ(ann_state(4).fallback, nullptr) << "on the network before the jump";
+  ASSERT_NE(ann_state(5).fallback, nullptr) << "the jump falls back";
+  EXPECT_EQ(ann_state(5).fell_back_at_step, 5);
+  // Three steps back inside: the soil answers them, and after the third the point is back.
+  for (std::size_t s = 5; s <= 8; ++s) {
+    EXPECT_EQ(on_ann.stresses[s], soil.stresses[s]) << "step " << s + 1 << " is the soil's";
+  }
+  EXPECT_NE(ann_state(6).fallback, nullptr);
+  EXPECT_EQ(ann_state(6).unflagged_on_fallback, 1);
+  EXPECT_NE(ann_state(7).fallback, nullptr);
+  EXPECT_EQ(ann_state(7).unflagged_on_fallback, 2);
+  EXPECT_EQ(ann_state(8).fallback, nullptr) << "back on the network after three unflagged steps";
+  EXPECT_EQ(ann.log().returns(), 1);
+  EXPECT_EQ(ann.log().fallbacks().size(), 1u);
+  // The network answers the next steps from the soil's stress: close to the soil, not equal.
+  EXPECT_NE(on_ann.stresses[9], soil.stresses[9]);
+  EXPECT_LT((on_ann.stresses[9] - soil.stresses[9]).norm(), 0.1 * soil.stresses[9].norm());
+  std::cout << "  back on the network at step 9; step 10 " << 100 * (on_ann.stresses[9] - soil.stresses[9]).norm() / soil.stresses[9].norm()
+            << " % off the soil's\n";
+  // Half-way to its return, a state saves and restores with its count.
+  const std::string halfway = ann_state(7).Serialize();
+  EXPECT_EQ(halfway.substr(0, 8), "GNGANN04");
+  const auto restored = ann.RestoreState(halfway);
+  EXPECT_EQ(static_cast<const AnnState&>(*restored).unflagged_on_fallback, 2);
+  EXPECT_EQ(restored->Serialize(), halfway);
+  // The format before the count (GNGANN03): the same bytes less the count, read as 0.
+  const std::size_t count_at = 8 + 9 * 8 + 6 * 8 + 8 + 8 + 8;  // tag, stress, strain, V = 0, flags, step
+  std::string older = halfway;
+  older.replace(0, 8, "GNGANN03");
+  older.erase(count_at, 8);
+  const auto read = ann.RestoreState(older);
+  EXPECT_EQ(static_cast<const AnnState&>(*read).unflagged_on_fallback, 0);
+  EXPECT_NE(static_cast<const AnnState&>(*read).fallback, nullptr);
+  // With the return off, the point stays on the soil to the end.
+  const AnnMaterial staying(SharedEnsemble(), SharedSoil());
+  const Walked on_staying = walk(staying);
+  ASSERT_EQ(on_staying.states.size(), increments.size());
+  EXPECT_NE(static_cast<const AnnState&>(*on_staying.states.back()).fallback, nullptr);
+  EXPECT_EQ(on_staying.stresses.back(), soil.stresses.back());
+  EXPECT_EQ(staying.log().returns(), 0);
+}
+
 // An ensemble that carries an internal variable (Drucker-Prager's equivalent plastic strain):
 // its envelope covers the carried input, it saves and loads whole, and the ANN material takes the
 // variable from the real model's state a point starts from and carries it step by step, close to

@@ -233,6 +233,23 @@ TEST_F(FeAnnTierTest, ChoosesTheSoilsModelAndRefusesWhatItCannotAnswer) {
   }
   empirical.surrogate_model = "bad id!";
   EXPECT_THROW(empirical.Validate(), InputError);
+
+  // The guard's return is in the tier's version (so in the cache key), and refused by field where
+  // it cannot hold.
+  FeAnnOptions returning = Options();
+  returning.return_after_steps = 10;
+  EXPECT_NE(FeAnnTier(returning, *models_).Version().find("-return10"), std::string::npos);
+  EXPECT_EQ(tier.Version().find("-return"), std::string::npos);
+  for (const auto& [steps, fallback] : {std::pair{10, false}, std::pair{-1, true}}) {
+    returning.return_after_steps = steps;
+    returning.fallback_enabled = fallback;
+    try {
+      FeAnnTier refused(returning, *models_);
+      ADD_FAILURE() << "return_after_steps " << steps << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "fe_ann.return_after_steps");
+    }
+  }
 }
 
 // Thresholds no input can meet: every point is flagged at its first increment and answered from
