@@ -74,7 +74,7 @@ class FallbackLog {
   void RecordNetworkCall(double seconds, std::int64_t points);
   void RecordStressReturns(std::int64_t points);  // answers SurrogateEnsemble::Admissible changed
   void RecordFallbackSeconds(double seconds);  // replays and points answered by the real model
-  void RecordReturn();  // a fallen-back point went back to the network
+  void RecordReturn();  // a fallen-back point went back to the network (in a trial too)
   std::vector<Event> fallbacks() const;
   std::int64_t unanswered_flags() const;
   double network_seconds() const;

@@ -75,7 +75,8 @@ struct AnnRunReport : FeDeRunReport {
   // the model's tensile limit or returned onto its cone), trial updates included.
   std::int64_t stress_returns = 0;
   double fallback_seconds = 0;        // replays and points on the RVE
-  std::int64_t returns = 0;           // fallen-back points that went back to the network
+  // Fallen-back points that went back to the network, trial updates included (as fallbacks).
+  std::int64_t returns = 0;
   double model_load_seconds = 0;
 };
 
