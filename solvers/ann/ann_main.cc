@@ -175,8 +175,7 @@ double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& eva
   const int repeats = 5;
   const auto start = std::chrono::steady_clock::now();
   for (int r = 0; r < repeats; ++r) evaluate_batch();
-  return 1e6 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
-         (repeats * static_cast<double>(points));
+  return 1e6 * Since(start) / (repeats * static_cast<double>(points));
 }
 
 // One GRU ("gru32": 32 hidden numbers per point), trained and measured as an ensemble member is.
@@ -446,8 +445,7 @@ int RunIncrementStudy(const CommandLine& line, const dem::rve::RveMaterial& rve)
     spec.Validate("--increment-steps.");
     const auto start = std::chrono::steady_clock::now();
     const StrainHistory history = RunLabPath(rve, spec, options);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = Since(start);
     if (!history.stopped_reason.empty()) {
       std::printf("# %d steps stopped: %s\n", steps, history.stopped_reason.c_str());
     }
@@ -512,8 +510,7 @@ int Run(const CommandLine& line) {
       RunPaths(*rve, training_paths, line.threads, "training", internal);
   const std::vector<StrainHistory> held_out =
       RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
-  const double generation_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double generation_s = Since(start);
   if (!line.packing_seeds.empty()) {
     PrintPackingSpread(line, entry->parameters, preset, held_out_paths, held_out);
   }
@@ -607,8 +604,7 @@ int Run(const CommandLine& line) {
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
         SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
-    const double train_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - train_start).count();
+    const double train_s = Since(train_start);
     ReportEnsemble(line, study, ensemble, architecture.Describe(), line.epochs, reports, train_s,
                    "");
   }
