@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
+#include <string>
 
 #include "clients/cli_client.h"
 
@@ -40,5 +42,19 @@ Command AddHealthCommand(CLI::App& parent);
 Command AddModelsCommand(CLI::App& parent);
 Command AddTrainCommand(CLI::App& parent);
 Command AddDatasetCommand(CLI::App& parent);
+
+// The fe-ann surrogate options that `gonogo curve` and `gonogo map` share (cli_training.cc), in
+// the group "Surrogate (fe-ann)": --model ID, and the request's guard over the server's:
+// --distance-threshold D, --spread-threshold S, --fallback on|off, --return-after-steps N.
+struct SurrogateOptions {
+  std::string model;  // empty: the soil's best
+  std::optional<double> distance_threshold;
+  std::optional<double> spread_threshold;
+  std::string fallback;  // "on", "off", or empty: the server's
+  std::optional<int> return_after_steps;
+};
+void AddSurrogateOptions(CLI::App& app, SurrogateOptions* surrogate, const std::string& model_help);
+// The guard's fields given, and only those (the server checks their values).
+v1::SurrogateGuard GuardFromOptions(const SurrogateOptions& surrogate);
 
 }  // namespace gonogo::cli

@@ -24,7 +24,7 @@ struct CurveOptions {
   bool no_similarity = false;
   bool job = false;
   bool no_wait = false;
-  std::string surrogate_model;  // fe-ann; empty: the soil's best
+  SurrogateOptions surrogate;  // fe-ann
 };
 
 struct ScalabilityOptions {
@@ -120,7 +120,8 @@ int RunCurve(Client& client, const CurveOptions& o) {
   *req.mutable_soil() = SoilFromOptions(o.soil);
   req.set_slip_step(o.slip_step);
   req.set_disable_similarity(o.no_similarity);
-  req.set_surrogate_model(o.surrogate_model);
+  req.set_surrogate_model(o.surrogate.model);
+  *req.mutable_surrogate_guard() = GuardFromOptions(o.surrogate);
   double load = 0;
   WheelFromOptions(o.wheel, req.mutable_tyre(), &load);
   req.set_wheel_load_n(load);
@@ -245,10 +246,8 @@ Command AddCurveCommand(CLI::App& parent) {
                   "tractive_efficiency, gross_traction_n, motion_resistance_n");
   curve->add_flag("--no-similarity", o->no_similarity,
                   "answer only from an exact cache key or fresh computation");
-  curve->add_option("--model", o->surrogate_model,
-                    "fe-ann: the surrogate model (gonogo models lists them); default: the soil's "
-                    "best")
-      ->type_name("ID");
+  AddSurrogateOptions(*curve, &o->surrogate,
+                      "the surrogate model (gonogo models lists them); default: the soil's best");
   curve->add_flag("--job", o->job, "run as a job with a progress bar, whatever the tier");
   curve->add_flag("--no-wait", o->no_wait, "when the curve runs as a job: print its id, return");
   return {curve, [o](Client& client) { return RunCurve(client, *o); }};

@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 constexpr size_t kChunkBytes = 1 << 20;
 
 struct MapOptions {
-  std::string surrogate_model;  // fe-ann; empty: each soil's best
+  SurrogateOptions surrogate;   // fe-ann
   std::string cone_index_file;  // GeoTIFF, kPa
   std::string slope_file;       // GeoTIFF, percent
   std::string elevation_file;   // GeoTIFF, m
@@ -105,7 +105,8 @@ v1::MapRequest MapRequestFromOptions(const MapOptions& o) {
   request.set_name(o.name.empty() ? "map " + fs::path(o.cone_index_file).stem().string() : o.name);
   request.set_tier(o.tier);
   request.set_disable_similarity(o.no_similarity);
-  request.set_surrogate_model(o.surrogate_model);
+  request.set_surrogate_model(o.surrogate.model);
+  *request.mutable_surrogate_guard() = GuardFromOptions(o.surrogate);
   *request.mutable_vehicle() = ReadJson<v1::Vehicle>(o.vehicle_file, "vehicle file");
   if (!o.soil_table_file.empty()) {
     *request.mutable_soil_table() = ReadJson<v1::SoilTable>(o.soil_table_file, "soil table");
@@ -258,10 +259,9 @@ Command AddMapCommand(CLI::App& parent) {
   map->add_option("--tier", o->tier, "traction tier (gonogo tiers lists them)")
       ->required()
       ->type_name("T");
-  map->add_option("--model", o->surrogate_model,
-                  "fe-ann: the surrogate model for every soil (gonogo models lists them); default: "
-                  "each soil's best")
-      ->type_name("ID");
+  AddSurrogateOptions(*map, &o->surrogate,
+                      "the surrogate model for every soil (gonogo models lists them); default: "
+                      "each soil's best");
   map->add_option("--out", o->out_dir, "directory for the products")->required()->type_name("DIR");
   map->add_option("--name", o->name, "free text shown in job lists; default: map CONE_INDEX_STEM")
       ->type_name("TEXT");

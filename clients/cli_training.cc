@@ -5,6 +5,7 @@
 //                [--no-wait]
 //   gonogo dataset [--soil NAME]
 //   gonogo dataset export DATASET --out DIR [--format csv|npy] [--role training|held-out]
+// and the surrogate options of `gonogo curve` and `gonogo map` (AddSurrogateOptions).
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -271,6 +272,41 @@ Command AddDatasetCommand(CLI::App& parent) {
   return {dataset, [soil, o, exported](Client& client) {
             return exported->parsed() ? RunExport(client, *o) : RunDatasets(client, *soil);
           }};
+}
+
+void AddSurrogateOptions(CLI::App& app, SurrogateOptions* o, const std::string& model_help) {
+  const std::string group = "Surrogate (fe-ann)";
+  app.add_option("--model", o->model, model_help)->type_name("ID")->group(group);
+  app.add_option("--distance-threshold", o->distance_threshold,
+                 "flag a point whose input is farther than D (Mahalanobis) from the training "
+                 "inputs; 0: the model's own; default: the server's")
+      ->type_name("D")
+      ->group(group);
+  app.add_option("--spread-threshold", o->spread_threshold,
+                 "flag a point whose members' stresses spread more than S of their mean; 0: the "
+                 "model's own; default: the server's")
+      ->type_name("S")
+      ->group(group);
+  app.add_option("--fallback", o->fallback,
+                 "on: a flagged point is answered by the soil's RVE; off: by the network, and "
+                 "counted; default: the server's")
+      ->check(CLI::Validator(CLI::IsMember({"on", "off"})).description(""))
+      ->type_name("on|off")
+      ->group(group);
+  app.add_option("--return-after-steps", o->return_after_steps,
+                 "a fallen-back point returns to the network after N increments in a row it "
+                 "would not have been flagged; 0: never; default: the server's")
+      ->type_name("N")
+      ->group(group);
+}
+
+v1::SurrogateGuard GuardFromOptions(const SurrogateOptions& o) {
+  v1::SurrogateGuard guard;
+  if (o.distance_threshold) guard.set_distance_threshold(*o.distance_threshold);
+  if (o.spread_threshold) guard.set_spread_threshold(*o.spread_threshold);
+  if (!o.fallback.empty()) guard.set_fallback_enabled(o.fallback == "on");
+  if (o.return_after_steps) guard.set_return_after_steps(*o.return_after_steps);
+  return guard;
 }
 
 }  // namespace gonogo::cli

@@ -44,6 +44,7 @@ v1::WorkerTask ToWorkerTask(const TaskSpec& t) {
   r->set_wheel_load_n(t.request.wheel_load_n);
   *r->mutable_soil() = ToProto(t.request.soil);
   r->set_surrogate_model(t.request.surrogate_model);
+  *r->mutable_surrogate_guard() = ToProto(t.request.surrogate_guard);
   for (double s : t.request.slips) w.add_slips(s);
   w.set_threads(t.needs.threads);
   w.set_checkpoint_dir(t.checkpoint_dir);
@@ -60,6 +61,7 @@ TaskSpec FromWorkerTask(const v1::WorkerTask& w) {
   t.request.wheel_load_n = w.request().wheel_load_n();
   t.request.soil = FromProto(w.request().soil());
   t.request.surrogate_model = w.request().surrogate_model();
+  t.request.surrogate_guard = FromProto(w.request().surrogate_guard());
   t.request.slips.assign(w.slips().begin(), w.slips().end());
   t.needs.ranks = std::max(1, w.group_ranks_size());
   t.needs.threads = std::max(1, w.threads());

@@ -17,7 +17,7 @@ std::optional<CachedAnswer> LookUpCurve(cache::CurveStore& store, const Traction
     return a;
   }
   if (!allow_similarity) return std::nullopt;
-  auto similar = store.FindSimilar(cache::Scoped(scope, cache::SimilarityGroup(tier.Name(), tier.Version(), q)), q,
+  auto similar = store.FindSimilar(cache::Scoped(scope, cache::SimilarityGroup(tier.Name(), tier.VersionFor(q), q)), q,
                                    mobility::kPiTermTolerance, mobility::kMinimumScaleRatio);
   if (!similar) return std::nullopt;
   CachedAnswer a;

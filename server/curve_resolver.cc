@@ -55,7 +55,7 @@ CurveTask CurveResolver::Prepare(const TractionTier& tier, TractionRequest reque
   CurveTask task;
   task.request = cache::Quantise(request);
   task.request.Validate();
-  task.key = cache::CurveKey(tier.Name(), tier.Version(), task.request);
+  task.key = cache::CurveKey(tier.Name(), tier.VersionFor(task.request), task.request);
   return task;
 }
 

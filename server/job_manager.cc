@@ -101,11 +101,13 @@ JobManager::ValidatedMap JobManager::Validate(const v1::MapRequest& request,
       TractionRequest probe;
       probe.soil = SoilState{0, info.name, info.parameters};
       probe.surrogate_model = request.surrogate_model();
+      probe.surrogate_guard = FromProto(request.surrogate_guard());
       tier.ResolveChoices(probe, "");
     }
   } else {
     TractionRequest probe;
     probe.surrogate_model = request.surrogate_model();
+    probe.surrogate_guard = FromProto(request.surrogate_guard());
     tier.ResolveChoices(probe, "");
   }
 
@@ -127,7 +129,8 @@ JobManager::ValidatedMap JobManager::Validate(const v1::MapRequest& request,
   }
   // The work the map makes, bounded before it is accepted.
   MapPlan plan = PlanMap(*terrain, vehicle, soil_table, tier,
-                         TractionRequest::SlipSweep(criteria.slip_step), request.surrogate_model());
+                         TractionRequest::SlipSweep(criteria.slip_step), request.surrogate_model(),
+                         FromProto(request.surrogate_guard()));
   if (static_cast<int64_t>(plan.tasks.size()) > config_.max_tasks_per_job) {
     throw LimitError("vehicle.axles",
                      "the map needs " + std::to_string(plan.tasks.size()) + " traction curves (" +
@@ -544,7 +547,10 @@ void JobManager::RunJob(const std::string& id) {
     report("writing products", false);
     const fs::path out_dir = fs::path(JobDir(id)) / "out";
     fs::create_directories(out_dir);
-    SummaryInputs si{id, request, tier.Name(), tier.Version(), resolver_.pool().Describe(), plan, *terrain,
+    // A map's curves share one guard, so any of its requests names its version.
+    const std::string tier_version =
+        plan.tasks.empty() ? tier.Version() : tier.VersionFor(plan.tasks.front());
+    SummaryInputs si{id, request, tier.Name(), tier_version, resolver_.pool().Describe(), plan, *terrain,
                      verdicts, total, total - hits - similar, hits, similar, smallest_ratio,
                      computed_by, vci_pa, criteria,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};

@@ -10,7 +10,8 @@ namespace gonogo::server {
 
 MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& vehicle,
                 const std::map<int32_t, SoilClassInfo>& soil_table, const TractionTier& tier,
-                const std::vector<double>& slips, const std::string& surrogate_model) {
+                const std::vector<double>& slips, const std::string& surrogate_model,
+                const SurrogateGuard& surrogate_guard) {
   MapPlan plan;
   const size_t cells = terrain.cone_index_kpa.size();
   plan.cell_unit.assign(cells, -1);
@@ -57,6 +58,7 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
     unit.soil = SoilForTier(tier, SoilState{plan.units[u].rating_cone_index_pa,
                                             plan.units[u].soil_name, plan.units[u].parameters});
     unit.surrogate_model = surrogate_model;
+    unit.surrogate_guard = surrogate_guard;
     tier.ResolveChoices(unit, "");
     for (size_t a = 0; a < vehicle.axles.size(); ++a) {
       TractionRequest r = unit;
@@ -64,7 +66,7 @@ MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& 
       r.wheel_load_n = vehicle.WheelLoadN(static_cast<int>(a));
       r.slips = slips;
       TractionRequest q = cache::Quantise(r);
-      std::string key = cache::CurveKey(tier.Name(), tier.Version(), q);
+      std::string key = cache::CurveKey(tier.Name(), tier.VersionFor(q), q);
       auto [it, inserted] = task_of_key.try_emplace(key, static_cast<int>(plan.tasks.size()));
       if (inserted) {
         plan.tasks.push_back(std::move(q));

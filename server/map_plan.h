@@ -34,11 +34,12 @@ struct MapPlan {
 };
 
 // Throws InputError("soil_class") for a class code missing from the soil table. `surrogate_model`
-// (fe-ann; empty: each soil's best) goes into every request, which the tier then settles
-// (TractionTier::ResolveChoices) before it is keyed.
+// (fe-ann; empty: each soil's best) and `surrogate_guard` go into every request, which the tier
+// then settles (TractionTier::ResolveChoices) before it is keyed.
 MapPlan PlanMap(const geo::TerrainLayers& terrain, const mobility::VehicleSpec& vehicle,
                 const std::map<int32_t, SoilClassInfo>& soil_table, const TractionTier& tier,
-                const std::vector<double>& slips, const std::string& surrogate_model = "");
+                const std::vector<double>& slips, const std::string& surrogate_model = "",
+                const SurrogateGuard& surrogate_guard = {});
 
 struct MapVerdicts {
   std::vector<uint8_t> go_class;  // per cell, mobility::GoClass codes

@@ -58,7 +58,26 @@ TractionRequest FromProto(const v1::GetTractionCurveRequest& request) {
   r.soil = FromProto(request.soil());
   r.slips = TractionRequest::SlipSweep(request.slip_step() == 0 ? 0.05 : request.slip_step());
   r.surrogate_model = request.surrogate_model();
+  r.surrogate_guard = FromProto(request.surrogate_guard());
   return r;
+}
+
+SurrogateGuard FromProto(const v1::SurrogateGuard& p) {
+  SurrogateGuard g;
+  if (p.has_distance_threshold()) g.distance_threshold = p.distance_threshold();
+  if (p.has_spread_threshold()) g.spread_threshold = p.spread_threshold();
+  if (p.has_fallback_enabled()) g.fallback_enabled = p.fallback_enabled();
+  if (p.has_return_after_steps()) g.return_after_steps = p.return_after_steps();
+  return g;
+}
+
+v1::SurrogateGuard ToProto(const SurrogateGuard& g) {
+  v1::SurrogateGuard p;
+  if (g.distance_threshold) p.set_distance_threshold(*g.distance_threshold);
+  if (g.spread_threshold) p.set_spread_threshold(*g.spread_threshold);
+  if (g.fallback_enabled) p.set_fallback_enabled(*g.fallback_enabled);
+  if (g.return_after_steps) p.set_return_after_steps(*g.return_after_steps);
+  return p;
 }
 
 v1::SoilState ToProto(const SoilState& s) {

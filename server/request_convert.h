@@ -44,6 +44,9 @@ SoilState FromProto(const v1::SoilState& soil);
 TractionRequest FromProto(const v1::GetTractionCurveRequest& request);
 v1::SoilState ToProto(const SoilState& soil);
 v1::TractionPoint ToProto(const TractionPoint& point);
+// The fields set, and only those (not validated: TractionRequest::Validate does).
+SurrogateGuard FromProto(const v1::SurrogateGuard& guard);
+v1::SurrogateGuard ToProto(const SurrogateGuard& guard);
 
 // Throws InputError naming "vehicle.<field>".
 mobility::VehicleSpec VehicleFromProto(const v1::Vehicle& vehicle);

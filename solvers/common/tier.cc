@@ -17,6 +17,8 @@ void TractionTier::ResolveChoices(TractionRequest& request,
                                   const std::string& field_prefix) const {
   Require(request.surrogate_model.empty(), field_prefix + "surrogate_model",
           "the " + Name() + " tier takes no surrogate model");
+  Require(request.surrogate_guard.Empty(), field_prefix + "surrogate_guard",
+          "the " + Name() + " tier has no surrogate to guard");
 }
 
 void TierRegistry::Register(std::unique_ptr<TractionTier> tier) {

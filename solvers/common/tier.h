@@ -71,6 +71,10 @@ class TractionTier {
   virtual std::string Name() const = 0;
   // Bumped whenever the numbers a tier returns could change; part of every cache key.
   virtual std::string Version() const = 0;
+  // The version of the curve a request (as ResolveChoices leaves it) computes, which the key
+  // carries: Version(), or, on a tier whose options a request may set (fe-ann: its surrogate
+  // guard), the version of the options the request sets.
+  virtual std::string VersionFor(const TractionRequest& /*request*/) const { return Version(); }
   virtual TierDescription Describe() const = 0;
   // Resources of one request; the default is one rank, one thread, negligible time.
   virtual TierNeeds Needs(const TractionRequest& /*request*/) const { return {}; }
@@ -84,9 +88,11 @@ class TractionTier {
   virtual void ValidateSoil(const SoilState& /*soil*/, const std::string& /*field*/) const {}
   // Makes the request definite before it is keyed: a tier that chooses something on the request's
   // behalf (fe-ann: the surrogate model, when none is named) writes its choice into the request,
-  // so that the cache key says what was computed. Throws InputError naming field_prefix +
-  // "surrogate_model" for a model the tier does not take or know, PreconditionError when it has
-  // nothing to answer with. Cheap. Default: the request may name no surrogate model.
+  // so that the cache key says what was computed; likewise the whole surrogate guard, when the
+  // request sets part of it. Throws InputError naming field_prefix + "surrogate_model" for a
+  // model the tier does not take or know (+ "surrogate_guard" for a guard it does not take),
+  // PreconditionError when it has nothing to answer with. Cheap. Default: the request may name
+  // no surrogate model and set no guard.
   virtual void ResolveChoices(TractionRequest& request, const std::string& field_prefix) const;
 
   // Computes one curve: throws CancelledError when the tier notices `context` cancelled during the

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <utility>
 
 #include "solvers/common/errors.h"
 
@@ -72,6 +73,18 @@ void SoilState::Validate(const std::string& p) const {
   if (parameters) SoilModels().Validate(*parameters, p + "parameters");
 }
 
+void SurrogateGuard::Validate(const std::string& p) const {
+  for (const auto& [value, name] : {std::pair{distance_threshold, "distance_threshold"},
+                                    std::pair{spread_threshold, "spread_threshold"}}) {
+    Require(!value || (std::isfinite(*value) && *value >= 0), p + name,
+            "must be a number >= 0 (0: the model's own)");
+  }
+  Require(!return_after_steps || *return_after_steps >= 0, p + "return_after_steps",
+          "must be >= 0 (0: never)");
+  Require(!return_after_steps || *return_after_steps == 0 || fallback_enabled.value_or(true),
+          p + "return_after_steps", "a point returns from its fallback, which this guard turns off");
+}
+
 void TractionRequest::Validate() const {
   soil.Validate("soil.");
   tyre.Validate("tyre.");
@@ -84,6 +97,7 @@ void TractionRequest::Validate() const {
     Require(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.',
             "surrogate_model", "must be a model id: letters, digits, '-', '_' and '.'");
   }
+  surrogate_guard.Validate("surrogate_guard.");
 }
 
 std::vector<double> TractionRequest::SlipSweep(double step) {

@@ -64,6 +64,30 @@ struct SoilState {
   void Validate(const std::string& field_prefix) const;
 };
 
+// A request's own guard for a tier with a surrogate (fe-ann: solvers/ann/surrogate_ensemble.h and
+// ann_material.h): when a point is flagged as outside what the surrogate learnt, and what answers
+// it then. A field left unset keeps the tier's, which the deployment sets (gonogo-server
+// --fe-ann-*); the tier writes the whole guard into the request before it is keyed.
+struct SurrogateGuard {
+  // Mahalanobis distance of an input from the training inputs above which it is flagged, -;
+  // 0: the model's own.
+  std::optional<double> distance_threshold;
+  // The ensemble members' spread, relative to their mean stress, above which a point is flagged,
+  // -; 0: the model's own.
+  std::optional<double> spread_threshold;
+  // true: a flagged point is answered by the soil's RVE; false: by the network, and counted.
+  std::optional<bool> fallback_enabled;
+  // A fallen-back point returns to the network after this many increments in a row the ensemble
+  // would not have flagged; 0: it stays on its RVE.
+  std::optional<int> return_after_steps;
+
+  bool Empty() const {
+    return !distance_threshold && !spread_threshold && !fallback_enabled && !return_after_steps;
+  }
+  // Each field set is a valid value (errors name field_prefix + the field).
+  void Validate(const std::string& field_prefix) const;
+};
+
 // One traction task: a single wheel on one soil state, swept over slip.
 struct TractionRequest {
   SoilState soil;
@@ -73,6 +97,8 @@ struct TractionRequest {
   // The registered surrogate model that answers for the soil (the fe-ann tier); empty: the tier's
   // choice, written here before the request is keyed (TractionTier::ResolveChoices).
   std::string surrogate_model;
+  // The surrogate's guard, for this request (a tier without a surrogate takes none).
+  SurrogateGuard surrogate_guard;
 
   void Validate() const;
   // Evenly spaced slips 0, step, 2 step, ... up to and including 1 (or the last point below it).

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "solvers/ann/ann_material.h"
@@ -16,6 +17,24 @@ constexpr char kTrainHint[] =
     "train and register one with `gonogo train --soil NAME` (a job on the server's pool), or "
     "offline with `gonogo-ann --soil NAME --preset PRESET --register DATA_DIR` "
     "(solvers/ann/README.md)";
+
+// The version of a curve computed with `options`: the fallback and the thresholds change what a
+// model answers (the model's id is in the key apart).
+std::string VersionOf(const FeAnnOptions& options) {
+  std::string version = "fe-ann-3";  // 2: stresses capped at the tensile limit; 3: and the cone
+  if (options.fe_de.preset != "default") version += "-" + options.fe_de.preset;
+  if (!options.fallback_enabled) version += "-nofallback";
+  if (options.distance_threshold > 0 || options.spread_threshold > 0) {
+    char text[64];
+    std::snprintf(text, sizeof text, "-d%.4g-s%.4g", options.distance_threshold,
+                  options.spread_threshold);
+    version += text;
+  }
+  if (options.return_after_steps > 0) {
+    version += "-return" + std::to_string(options.return_after_steps);
+  }
+  return version;
+}
 
 }  // namespace
 
@@ -36,21 +55,28 @@ FeAnnTier::FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelS
   if (models_ == nullptr) throw InputError("fe_ann.models", "a model source is required");
 }
 
-std::string FeAnnTier::Version() const {
-  // The fallback and the thresholds change what a model answers; the model's id is in the key.
-  std::string version = "fe-ann-3";  // 2: stresses capped at the tensile limit; 3: and the cone
-  if (options_.fe_de.preset != "default") version += "-" + options_.fe_de.preset;
-  if (!options_.fallback_enabled) version += "-nofallback";
-  if (options_.distance_threshold > 0 || options_.spread_threshold > 0) {
-    char text[64];
-    std::snprintf(text, sizeof text, "-d%.4g-s%.4g", options_.distance_threshold,
-                  options_.spread_threshold);
-    version += text;
-  }
-  if (options_.return_after_steps > 0) {
-    version += "-return" + std::to_string(options_.return_after_steps);
-  }
-  return version;
+std::string FeAnnTier::Version() const { return VersionOf(options_); }
+
+std::string FeAnnTier::VersionFor(const TractionRequest& request) const {
+  return VersionOf(OptionsFor(request, ""));
+}
+
+FeAnnOptions FeAnnTier::OptionsFor(const TractionRequest& request,
+                                   const std::string& prefix) const {
+  const SurrogateGuard& guard = request.surrogate_guard;
+  guard.Validate(prefix + "surrogate_guard.");
+  FeAnnOptions options = options_;
+  if (guard.distance_threshold) options.distance_threshold = *guard.distance_threshold;
+  if (guard.spread_threshold) options.spread_threshold = *guard.spread_threshold;
+  if (guard.fallback_enabled) options.fallback_enabled = *guard.fallback_enabled;
+  // A request that turns the fallback off has nothing to return from.
+  if (!options.fallback_enabled && !guard.return_after_steps) options.return_after_steps = 0;
+  if (guard.return_after_steps) options.return_after_steps = *guard.return_after_steps;
+  Require(options.return_after_steps == 0 || options.fallback_enabled,
+          prefix + "surrogate_guard.return_after_steps",
+          "a point returns from its fallback, which this server turns off (gonogo-server "
+          "--fe-ann-no-fallback); set surrogate_guard.fallback_enabled too");
+  return options;
 }
 
 TierDescription FeAnnTier::Describe() const {
@@ -102,36 +128,49 @@ SurrogateModelRecord FeAnnTier::Choose(const TractionRequest& request,
 
 void FeAnnTier::ResolveChoices(TractionRequest& request, const std::string& prefix) const {
   request.surrogate_model = Choose(request, prefix).id;
+  if (request.surrogate_guard.Empty()) return;
+  // Whole, so that the request says what computes it wherever it goes (a worker rank).
+  const FeAnnOptions options = OptionsFor(request, prefix);
+  request.surrogate_guard.distance_threshold = options.distance_threshold;
+  request.surrogate_guard.spread_threshold = options.spread_threshold;
+  request.surrogate_guard.fallback_enabled = options.fallback_enabled;
+  request.surrogate_guard.return_after_steps = options.return_after_steps;
 }
 
 std::shared_ptr<const ann::SurrogateEnsemble> FeAnnTier::Load(
-    const SurrogateModelRecord& record) const {
+    const SurrogateModelRecord& record, const FeAnnOptions& options) const {
+  char thresholds[64];
+  std::snprintf(thresholds, sizeof thresholds, "|%.17g|%.17g", options.distance_threshold,
+                options.spread_threshold);
+  const std::string name = record.id + thresholds;
   std::lock_guard<std::mutex> lock(loaded_mutex_);
-  auto it = loaded_.find(record.id);
+  auto it = loaded_.find(name);
   if (it != loaded_.end()) return it->second;
   auto ensemble =
       std::make_shared<ann::SurrogateEnsemble>(ann::SurrogateEnsemble::Load(record.directory));
-  if (options_.distance_threshold > 0 || options_.spread_threshold > 0) {
-    ensemble->SetThresholds(options_.distance_threshold > 0 ? options_.distance_threshold
-                                                            : ensemble->distance_threshold(),
-                            options_.spread_threshold > 0 ? options_.spread_threshold
-                                                          : ensemble->spread_threshold());
+  if (options.distance_threshold > 0 || options.spread_threshold > 0) {
+    ensemble->SetThresholds(options.distance_threshold > 0 ? options.distance_threshold
+                                                           : ensemble->distance_threshold(),
+                            options.spread_threshold > 0 ? options.spread_threshold
+                                                         : ensemble->spread_threshold());
   }
-  loaded_[record.id] = ensemble;
+  loaded_[name] = ensemble;
   return ensemble;
 }
 
-AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& context) const {
+AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& context,
+                             const AnnProgressReport& on_progress) const {
   request.Validate();
   const SurrogateModelRecord record = Choose(request, "");
+  const FeAnnOptions options = OptionsFor(request, "");
   const auto load_start = std::chrono::steady_clock::now();
-  const std::shared_ptr<const ann::SurrogateEnsemble> ensemble = Load(record);
+  const std::shared_ptr<const ann::SurrogateEnsemble> ensemble = Load(record, options);
   const double load_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count();
 
   ann::AnnMaterialOptions material_options;
-  material_options.fallback_enabled = options_.fallback_enabled;
-  material_options.return_after_steps = options_.return_after_steps;
+  material_options.fallback_enabled = options.fallback_enabled;
+  material_options.return_after_steps = options.return_after_steps;
   // What a model carrying internal variables takes from a point's settled RVE.
   material_options.internal_variables = RveFabricVariables();
   std::shared_ptr<const ann::AnnMaterial> material;
@@ -148,10 +187,25 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
       };
   ComputeContext alone = context;
   alone.communicator = MPI_COMM_NULL;
+  if (on_progress) {
+    alone.progress = [&material, &on_progress, outer = context.progress](double fraction) {
+      if (outer) outer(fraction);
+      AnnProgress progress;
+      progress.fraction = fraction;
+      if (material) {
+        const ann::FallbackLog& log = material->log();
+        progress.fallbacks = static_cast<int>(log.fallbacks().size());
+        progress.returns = log.returns();
+        progress.network_seconds = log.network_seconds();
+        progress.fallback_seconds = log.fallback_seconds();
+      }
+      on_progress(progress);
+    };
+  }
   AnnRunReport report;
   static_cast<FeDeRunReport&>(report) = fe_de_.RunWithStandIn(request, make_stand_in, alone);
   report.curve.tier = Name();
-  report.curve.tier_version = Version();
+  report.curve.tier_version = VersionOf(options);
   report.model_id = record.id;
   report.model_load_seconds = load_seconds;
   if (material) {

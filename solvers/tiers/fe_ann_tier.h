@@ -13,8 +13,12 @@
 // when flagged, replays its increments on that RVE (the fallback) and stays on it, or, with
 // FeAnnOptions::return_after_steps, returns to the network once back inside. The curve's
 // figures (AnnRunReport) say how many points fell back, at which step, and where the time went.
+// The deployment sets the guard (FeAnnOptions); a request may set its own over it
+// (TractionRequest::surrogate_guard), and the curve's version names the guard that computed it.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -80,12 +84,24 @@ struct AnnRunReport : FeDeRunReport {
   double model_load_seconds = 0;
 };
 
+// What an fe-ann run has done so far, at one of the rig's progress reports (a long run's only
+// view of where its time goes while it runs: the fallbacks are what makes one long).
+struct AnnProgress {
+  double fraction = 0;  // of the run's FE steps
+  int fallbacks = 0;    // as AnnRunReport's, so far
+  std::int64_t returns = 0;
+  double network_seconds = 0;
+  double fallback_seconds = 0;
+};
+using AnnProgressReport = std::function<void(const AnnProgress&)>;
+
 class FeAnnTier : public TractionTier {
  public:
   FeAnnTier(FeAnnOptions options, std::shared_ptr<const SurrogateModelSource> models);
 
   std::string Name() const override { return "fe-ann"; }
   std::string Version() const override;
+  std::string VersionFor(const TractionRequest& request) const override;
   bool UsesConeIndex() const override { return false; }
   bool UsesSoilName() const override { return true; }
   TierDescription Describe() const override;
@@ -94,8 +110,14 @@ class FeAnnTier : public TractionTier {
   void ResolveChoices(TractionRequest& request, const std::string& field_prefix) const override;
 
   const FeAnnOptions& options() const { return options_; }
+  // The tier's options with the request's surrogate guard over them; InputError naming
+  // field_prefix + "surrogate_guard." + the field for a guard these options cannot keep.
+  FeAnnOptions OptionsFor(const TractionRequest& request, const std::string& field_prefix) const;
   // Compute, with the run's figures; the request's model as ResolveChoices leaves it.
-  AnnRunReport Run(TractionRequest request, const ComputeContext& context) const;
+  // `on_progress`, when set, is called at each of the rig's progress reports (after
+  // context.progress), on the thread that runs the rig.
+  AnnRunReport Run(TractionRequest request, const ComputeContext& context,
+                   const AnnProgressReport& on_progress = {}) const;
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,
@@ -103,13 +125,15 @@ class FeAnnTier : public TractionTier {
 
  private:
   SurrogateModelRecord Choose(const TractionRequest& request, const std::string& prefix) const;
-  std::shared_ptr<const ann::SurrogateEnsemble> Load(const SurrogateModelRecord& record) const;
+  std::shared_ptr<const ann::SurrogateEnsemble> Load(const SurrogateModelRecord& record,
+                                                     const FeAnnOptions& options) const;
 
   FeAnnOptions options_;
   FeDeTier fe_de_;
   std::shared_ptr<const SurrogateModelSource> models_;
   mutable std::mutex loaded_mutex_;
-  mutable std::map<std::string, std::shared_ptr<const ann::SurrogateEnsemble>> loaded_;  // by id
+  // By id and flag thresholds.
+  mutable std::map<std::string, std::shared_ptr<const ann::SurrogateEnsemble>> loaded_;
 };
 
 // A SurrogateModelSource over a fixed list (tests, the gonogo-ann command).

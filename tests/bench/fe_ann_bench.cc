@@ -3,7 +3,8 @@
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
 //                       [--fe-de-budget-s S] [--carry coordination_number]
-//                       [--return-after-steps N]
+//                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
+//                       [--progress-every-s 60]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -15,7 +16,10 @@
 //     seconds, the fe-ann phases (network, fallbacks, model load, the rest: FE and contact), the
 //     speedup and the largest differences; with --fe-de-budget-s, a configuration whose fe-de
 //     curve takes hours (default): fe-de run for S seconds and its whole time projected from its
-//     pace (solvers/tiers/fe_de_pace.h, a lower bound), and fe-ann run to the end;
+//     pace (solvers/tiers/fe_de_pace.h, a lower bound), and fe-ann run to the end (or, with
+//     --fe-ann-budget-s, stopped after S seconds); while fe-ann runs, a line every
+//     --progress-every-s seconds: how far, the fallbacks and returns so far, and their seconds
+//     against the network's; --no-fe-de leaves fe-de out;
 //   - peak resident memory after each part.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
@@ -70,6 +74,8 @@ int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
   int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
+  double fe_ann_budget_s = 0, progress_every_s = 60;
+  bool no_fe_de = false;
   std::vector<std::string> carried;
   int return_after_steps = 0;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
@@ -94,6 +100,13 @@ int main(int argc, char** argv) {
   app.add_option("--fe-de-budget-s", fe_de_budget_s,
                  "> 0: run fe-de this long and project its whole time from its pace")
       ->capture_default_str();
+  app.add_flag("--no-fe-de", no_fe_de, "no fe-de curve: fe-ann alone (its speedup not measured)");
+  app.add_option("--fe-ann-budget-s", fe_ann_budget_s,
+                 "> 0: stop the fe-ann curve after this long and print how far it came")
+      ->capture_default_str();
+  app.add_option("--progress-every-s", progress_every_s,
+                 "seconds between the fe-ann run's progress lines")
+      ->capture_default_str();
   app.add_option("--distance-threshold", distance_threshold,
                  "the fe-ann run's envelope distance threshold; 0: the model's own")
       ->capture_default_str();
@@ -103,6 +116,10 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "OpenMP threads running the training paths")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (no_fe_de && fe_de_budget_s > 0) {
+    std::fprintf(stderr, "gonogo-bench-fe-ann: --no-fe-de and --fe-de-budget-s exclude each other\n");
+    return 2;
+  }
   try {
     const tiers::CatalogueEntry* entry =
         tiers::BuiltinSoilCatalogue().Find(soil_name, dem::rve::kRveSoilModel);
@@ -192,7 +209,9 @@ int main(int argc, char** argv) {
     auto start = std::chrono::steady_clock::now();
     tiers::FeDeRunReport de;
     double de_s = 0;
-    if (fe_de_budget_s > 0) {
+    if (no_fe_de) {
+      std::printf("fe-de curve: not run (--no-fe-de)\n");
+    } else if (fe_de_budget_s > 0) {
       const tiers::FeDePace pace =
           tiers::MeasureFeDePace(tiers::FeDeTier(fe_de), request, fe_de_budget_s);
       de_s = pace.projected_s();
@@ -209,19 +228,51 @@ int main(int argc, char** argv) {
     }
     std::fflush(stdout);
     start = std::chrono::steady_clock::now();
-    const tiers::AnnRunReport ann = fe_ann.Run(request, {});
+    ComputeContext ann_context;
+    ann_context.cancelled = [&] { return fe_ann_budget_s > 0 && Since(start) > fe_ann_budget_s; };
+    double last_line_s = 0;
+    tiers::AnnProgress last_progress;
+    const tiers::AnnProgressReport print_progress = [&](const tiers::AnnProgress& p) {
+      last_progress = p;
+      if (Since(start) - last_line_s < progress_every_s) return;
+      last_line_s = Since(start);
+      std::printf("  fe-ann %.0f s: %.1f %% of the FE steps; %d fallbacks (%lld returned), "
+                  "fallbacks %.1f s, network %.1f s\n",
+                  last_line_s, 100 * p.fraction, p.fallbacks, static_cast<long long>(p.returns),
+                  p.fallback_seconds, p.network_seconds);
+      std::fflush(stdout);
+    };
+    tiers::AnnRunReport ann;
+    try {
+      ann = fe_ann.Run(request, ann_context, print_progress);
+    } catch (const CancelledError&) {
+      const tiers::AnnProgress& p = last_progress;
+      std::printf("fe-ann curve: stopped after %.0f s (--fe-ann-budget-s) at %.1f %% of the FE "
+                  "steps: %d fallbacks (%lld returned), fallbacks %.1f s, network %.1f s, the "
+                  "rest (FE, contact) %.1f s; peak RSS %.0f MB\n",
+                  Since(start), 100 * p.fraction, p.fallbacks, static_cast<long long>(p.returns),
+                  p.fallback_seconds, p.network_seconds,
+                  Since(start) - p.fallback_seconds - p.network_seconds, PeakRssMb());
+      std::filesystem::remove_all(directory);
+      return 0;
+    }
     const double ann_s = Since(start);
     const double rest_s =
         ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
-    std::printf("fe-ann curve: %.2f s wall (%.1fx%s): network %.2f s (%lld point updates, %.1f us "
+    char speedup[64] = "fe-de not run";
+    if (!no_fe_de) {
+      std::snprintf(speedup, sizeof speedup, "%.1fx%s", de_s / ann_s,
+                    fe_de_budget_s > 0 ? " of the projection" : "");
+    }
+    std::printf("fe-ann curve: %.2f s wall (%s): network %.2f s (%lld point updates, %.1f us "
                 "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s (%lld returned), "
                 "model load %.3f s, FE and contact %.2f s; peak RSS %.0f MB\n",
-                ann_s, de_s / ann_s, fe_de_budget_s > 0 ? " of the projection" : "",
+                ann_s, speedup,
                 ann.network_seconds, static_cast<long long>(ann.network_point_updates),
                 1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
                 static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
                 static_cast<long long>(ann.returns), ann.model_load_seconds, rest_s, PeakRssMb());
-    if (fe_de_budget_s > 0) {
+    if (fe_de_budget_s > 0 || no_fe_de) {
       std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
                   "sinkage_m\n");
       for (const TractionPoint& p : ann.curve.points) {

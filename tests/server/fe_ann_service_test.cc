@@ -6,8 +6,11 @@
 // crosses to the rank with the task), then comes from the cache; a map on fe-ann runs; an unknown
 // model (for a curve or a map), or a model given to another tier, is refused by field. A server
 // started with the guard set otherwise (--fe-ann-no-fallback, --fe-ann-distance-threshold) names
-// it in the tier's version and computes the curve anew under its own key; a negative threshold,
-// and a return from a fallback that is off, are refused by flag.
+// it in the tier's version, under which a request's own guard (gonogo curve --fallback off
+// --distance-threshold 30 on the first server) had already computed the curve on the worker rank;
+// a request there may set the guard back (its curve is the first server's); a negative threshold,
+// and a return from a fallback that is off, are refused by flag and, in a request, by field (a
+// guard on another tier too).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -86,6 +89,24 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
             std::string::npos)
       << "computed on the worker rank: " << again.out;
 
+  // The request's own guard: the curve computed anew on the worker rank, its version naming the
+  // guard the rank ran (the guard crossed to the rank with the task).
+  const std::string kOwnGuard = " --fallback off --distance-threshold 30";
+  const CliRun own_guard = Gonogo(server.endpoint(), std::string(kWheel) + kOwnGuard);
+  ASSERT_EQ(own_guard.exit_code, 0) << own_guard.out;
+  EXPECT_NE(own_guard.out.find("tier fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
+      << own_guard.out;
+  EXPECT_NE(own_guard.out.find("surrogate model " + id + ", computed by rank 1"), std::string::npos)
+      << "not the default guard's cached curve: " << own_guard.out;
+  for (const auto& [flags, field] :
+       {std::pair{" --distance-threshold -1", "surrogate_guard.distance_threshold"},
+        std::pair{" --fallback off --return-after-steps 5", "surrogate_guard.return_after_steps"}}) {
+    const CliRun bad_guard = Gonogo(server.endpoint(), std::string(kWheel) + flags);
+    EXPECT_EQ(bad_guard.exit_code, 3) << bad_guard.out;
+    EXPECT_NE(bad_guard.out.find("INVALID_ARGUMENT"), std::string::npos) << bad_guard.out;
+    EXPECT_NE(bad_guard.out.find(field), std::string::npos) << bad_guard.out;
+  }
+
   const CliRun unknown = Gonogo(server.endpoint(), std::string(kWheel) + " --model no-such");
   EXPECT_EQ(unknown.exit_code, 3) << unknown.out;
   EXPECT_NE(unknown.out.find("INVALID_ARGUMENT"), std::string::npos) << unknown.out;
@@ -98,12 +119,30 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_EQ(other_tier.exit_code, 3) << other_tier.out;
   EXPECT_NE(other_tier.out.find("the bekker tier takes no surrogate model"), std::string::npos)
       << other_tier.out;
+  const CliRun other_tier_guard =
+      Gonogo(server.endpoint(),
+             "curve --tier bekker --soil lll_dry_sand --wheel-diameter 0.5 --wheel-width 0.2 "
+             "--section-height 0.1 --wheel-load 1000 --fallback off");
+  EXPECT_EQ(other_tier_guard.exit_code, 3) << other_tier_guard.out;
+  EXPECT_NE(other_tier_guard.out.find("surrogate_guard: the bekker tier has no surrogate to guard"),
+            std::string::npos)
+      << other_tier_guard.out;
 
   const std::string out = (dir.path() / "map").string();
   const CliRun map = Gonogo(server.endpoint(), map_args + out);
   ASSERT_EQ(map.exit_code, 0) << map.out;
   EXPECT_TRUE(fs::exists(fs::path(out) / "gonogo.tif"));
   EXPECT_NE(map.out.find("tasks 1/1  cache hits 1"), std::string::npos) << map.out;
+  // A map's guard keys its curves as a curve's does: its one curve is the guarded one above.
+  const CliRun guarded_map =
+      Gonogo(server.endpoint(), map_args + (dir.path() / "map-guarded").string() + kOwnGuard);
+  ASSERT_EQ(guarded_map.exit_code, 0) << guarded_map.out;
+  EXPECT_NE(guarded_map.out.find("tasks 1/1  cache hits 1"), std::string::npos) << guarded_map.out;
+  const CliRun bad_guard_map = Gonogo(
+      server.endpoint(), map_args + (dir.path() / "map3").string() + " --spread-threshold -1");
+  EXPECT_EQ(bad_guard_map.exit_code, 3) << bad_guard_map.out;
+  EXPECT_NE(bad_guard_map.out.find("surrogate_guard.spread_threshold"), std::string::npos)
+      << bad_guard_map.out;
   const CliRun bad_map =
       Gonogo(server.endpoint(), map_args + (dir.path() / "map2").string() + " --model no-such");
   EXPECT_EQ(bad_map.exit_code, 3) << bad_map.out;
@@ -118,11 +157,26 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   ASSERT_EQ(guarded_tiers.exit_code, 0) << guarded_tiers.out;
   EXPECT_NE(guarded_tiers.out.find("fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
       << guarded_tiers.out;
+  // Not the default guard's cached curve: the one the request's own guard computed on the first
+  // server, under the same version.
   const CliRun unguarded = Gonogo(guarded.endpoint(), std::string(kWheel) + " --model " + id);
   ASSERT_EQ(unguarded.exit_code, 0) << unguarded.out;
-  EXPECT_NE(unguarded.out.find("surrogate model " + id + ", computed by rank 1"),
+  EXPECT_NE(unguarded.out.find("tier fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
+      << unguarded.out;
+  EXPECT_NE(unguarded.out.find("surrogate model " + id + ", from the cache by rank 1"),
             std::string::npos)
-      << "not the default guard's cached curve: " << unguarded.out;
+      << unguarded.out;
+  // A request sets the deployment's guard back to the model's own: the first server's curve.
+  const CliRun set_back = Gonogo(guarded.endpoint(), std::string(kWheel) +
+                                                         " --fallback on --distance-threshold 0");
+  ASSERT_EQ(set_back.exit_code, 0) << set_back.out;
+  EXPECT_NE(set_back.out.find("tier fe-ann (fe-ann-3-tiny),"), std::string::npos) << set_back.out;
+  EXPECT_NE(set_back.out.find("from the cache"), std::string::npos) << set_back.out;
+  const CliRun no_return =
+      Gonogo(guarded.endpoint(), std::string(kWheel) + " --return-after-steps 5");
+  EXPECT_EQ(no_return.exit_code, 3) << no_return.out;
+  EXPECT_NE(no_return.out.find("surrogate_guard.return_after_steps"), std::string::npos)
+      << "this server's fallback is off: " << no_return.out;
   EXPECT_EQ(guarded.Terminate(), 0);
 }
 

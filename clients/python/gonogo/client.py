@@ -270,19 +270,23 @@ class Client:
 
     # --- maps -------------------------------------------------------------------------------------
     def submit_map(self, *, tier, vehicle, cone_index, slope=None, elevation=None, soil_class=None,
-                   soil_table=None, name=None, criteria=None, model=None, similarity=True):
+                   soil_table=None, name=None, criteria=None, model=None, guard=None, similarity=True):
         """Submits a map job; returns its Job.
 
         Rasters (cone_index in kPa, slope in percent or elevation in m, soil_class codes) are GeoTIFF
         paths, or (array, geotransform, crs) tuples written through GDAL (crs: WKT, "EPSG:n" or
         anything GDAL's SetFromUserInput takes). vehicle and soil_table: a JSON file (the CLI's
         formats), a dict or a message. criteria: a dict of pb.Criteria fields (design_slip,
-        max_slip, go_margin, passes, slip_step)."""
+        max_slip, go_margin, passes, slip_step). fe-ann: model (a registered model's id) and guard (a
+        dict of pb.SurrogateGuard fields: distance_threshold, spread_threshold, fallback_enabled,
+        return_after_steps; those left out keep the server's)."""
         if (slope is None) == (elevation is None):
             raise InputError("slope", "give exactly one of slope and elevation")
         if (soil_class is None) != (soil_table is None):
             raise InputError("soil_table", "soil_class and soil_table go together")
         request = pb.MapRequest(tier=tier, disable_similarity=not similarity, surrogate_model=model or "")
+        if guard:
+            request.surrogate_guard.CopyFrom(_message_from(guard, pb.SurrogateGuard, "guard"))
         request.vehicle.CopyFrom(_message_from(vehicle, pb.Vehicle, "vehicle"))
         if soil_table is not None:
             request.soil_table.CopyFrom(_message_from(soil_table, pb.SoilTable, "soil_table"))
@@ -336,17 +340,20 @@ class Client:
         return _message_from(dict(tyre), pb.Tyre, "tyre"), wheel_load_n
 
     def curve(self, *, tier, vehicle=None, axle=1, tyre=None, wheel_load_n=None, cone_index_kpa=None,
-              soil=None, soil_parameters=None, slip_step=0.0, similarity=True, model=None,
+              soil=None, soil_parameters=None, slip_step=0.0, similarity=True, model=None, guard=None,
               as_dataframe=None):
         """One wheel's traction curve (a Curve; its `points` a NumPy structured array, or a pandas
         DataFrame when pandas is installed, unless as_dataframe=False).
 
         The wheel: a vehicle's axle (vehicle=..., axle=1 front), or tyre (dict of pb.Tyre fields, m,
         Pa) with wheel_load_n. The soil: cone_index_kpa, a catalogue soil name, and/or
-        soil_parameters {"model": ..., "values": {...}} in the units `gonogo soils` lists."""
+        soil_parameters {"model": ..., "values": {...}} in the units `gonogo soils` lists. fe-ann: model
+        and guard as for submit_map."""
         tyre_message, load = self._wheel(vehicle, axle, tyre, wheel_load_n)
         request = pb.GetTractionCurveRequest(tier=tier, wheel_load_n=load, slip_step=slip_step,
                                              disable_similarity=not similarity, surrogate_model=model or "")
+        if guard:
+            request.surrogate_guard.CopyFrom(_message_from(guard, pb.SurrogateGuard, "guard"))
         request.tyre.CopyFrom(tyre_message)
         request.soil.CopyFrom(_soil(cone_index_kpa, soil, soil_parameters))
         return Curve(_call(self._stub.GetTractionCurve, request, metadata=self._metadata), as_dataframe)

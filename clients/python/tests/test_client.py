@@ -131,6 +131,10 @@ def test_refusals_carry_the_grpc_code_and_the_field(client, terrain, server):
         client.curve(tier="no-such-tier", vehicle=VEHICLE, cone_index_kpa=300)
     assert bad_tier.value.code == grpc.StatusCode.INVALID_ARGUMENT
     assert bad_tier.value.field == "tier"
+    with pytest.raises(gonogo.GonogoError) as unguarded:
+        client.curve(tier="bekker", vehicle=VEHICLE, soil="lll_dry_sand", guard={"fallback_enabled": False})
+    assert unguarded.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert unguarded.value.field == "surrogate_guard"
     heavy = json.load(open(VEHICLE))
     heavy["mass_kg"] = 1e9
     with pytest.raises(gonogo.GonogoError) as implausible:

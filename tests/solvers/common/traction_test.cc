@@ -45,6 +45,36 @@ TEST(TractionRequest, ValidateNamesTheField) {
   }
 }
 
+TEST(TractionRequest, ASurrogateGuardIsRefusedByField) {
+  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}};
+  r.surrogate_guard.distance_threshold = 0;  // the model's own
+  r.surrogate_guard.return_after_steps = 20;
+  EXPECT_NO_THROW(r.Validate());
+  const auto refused_field = [](const TractionRequest& bad) -> std::string {
+    try {
+      bad.Validate();
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return "(accepted)";
+  };
+  TractionRequest bad = r;
+  bad.surrogate_guard.distance_threshold = -1;
+  EXPECT_EQ(refused_field(bad), "surrogate_guard.distance_threshold");
+  bad = r;
+  bad.surrogate_guard.spread_threshold = NAN;
+  EXPECT_EQ(refused_field(bad), "surrogate_guard.spread_threshold");
+  bad = r;
+  bad.surrogate_guard.return_after_steps = -3;
+  EXPECT_EQ(refused_field(bad), "surrogate_guard.return_after_steps");
+  bad = r;
+  bad.surrogate_guard.fallback_enabled = false;
+  EXPECT_EQ(refused_field(bad), "surrogate_guard.return_after_steps")
+      << "a return from a fallback the same guard turns off";
+  bad.surrogate_guard.return_after_steps = 0;
+  EXPECT_EQ(refused_field(bad), "(accepted)");
+}
+
 TEST(TyreGeometry, RollingRadiusDefaultsToLoadedRadius) {
   TyreGeometry t = FedAlphaTyre();
   t.rolling_radius_m = 0;

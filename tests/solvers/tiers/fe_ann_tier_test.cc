@@ -252,6 +252,90 @@ TEST_F(FeAnnTierTest, ChoosesTheSoilsModelAndRefusesWhatItCannotAnswer) {
   }
 }
 
+// A request's own guard over the deployment's: written whole into the request before it is keyed,
+// named in the version the key carries, refused by field where it cannot hold, and refused by a
+// tier without a surrogate.
+TEST_F(FeAnnTierTest, ARequestSetsItsOwnGuardOverTheDeployments) {
+  FeAnnOptions returning = Options();
+  returning.return_after_steps = 10;
+  const FeAnnTier tier(returning, *models_);
+  TractionRequest request = Request();
+  tier.ResolveChoices(request, "");
+  EXPECT_TRUE(request.surrogate_guard.Empty()) << "no guard asked, none written";
+  EXPECT_EQ(tier.VersionFor(request), tier.Version());
+
+  request.surrogate_guard.fallback_enabled = false;
+  tier.ResolveChoices(request, "curve.");
+  const SurrogateGuard& whole = request.surrogate_guard;
+  ASSERT_TRUE(whole.distance_threshold && whole.spread_threshold && whole.fallback_enabled &&
+              whole.return_after_steps);
+  EXPECT_EQ(*whole.distance_threshold, 0);
+  EXPECT_FALSE(*whole.fallback_enabled);
+  EXPECT_EQ(*whole.return_after_steps, 0) << "with the fallback off there is nothing to return from";
+  EXPECT_EQ(tier.VersionFor(request), "fe-ann-3-tiny-nofallback");
+  EXPECT_EQ(tier.Version(), "fe-ann-3-tiny-return10");
+  TractionRequest again = request;  // resolving a resolved request changes nothing
+  tier.ResolveChoices(again, "");
+  EXPECT_EQ(tier.VersionFor(again), tier.VersionFor(request));
+
+  TractionRequest tighter = Request();
+  tighter.surrogate_guard.distance_threshold = 30;
+  EXPECT_EQ(tier.VersionFor(tighter), "fe-ann-3-tiny-d30-s0-return10");
+
+  const auto refused_field = [&](const FeAnnTier& on, SurrogateGuard guard) -> std::string {
+    TractionRequest bad = Request();
+    bad.surrogate_guard = guard;
+    try {
+      on.ResolveChoices(bad, "curve.");
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return "(accepted)";
+  };
+  SurrogateGuard negative;
+  negative.spread_threshold = -0.1;
+  EXPECT_EQ(refused_field(tier, negative), "curve.surrogate_guard.spread_threshold");
+  SurrogateGuard returns_from_nothing;
+  returns_from_nothing.fallback_enabled = false;
+  returns_from_nothing.return_after_steps = 5;
+  EXPECT_EQ(refused_field(tier, returns_from_nothing), "curve.surrogate_guard.return_after_steps");
+  FeAnnOptions no_fallback = Options();
+  no_fallback.fallback_enabled = false;
+  SurrogateGuard returns;
+  returns.return_after_steps = 5;
+  EXPECT_EQ(refused_field(FeAnnTier(no_fallback, *models_), returns),
+            "curve.surrogate_guard.return_after_steps")
+      << "the deployment's fallback is off";
+  returns.fallback_enabled = true;
+  EXPECT_EQ(refused_field(FeAnnTier(no_fallback, *models_), returns), "(accepted)");
+
+  TractionRequest empirical = Request();
+  empirical.surrogate_guard.fallback_enabled = false;
+  try {
+    EmpiricalTier().ResolveChoices(empirical, "");
+    ADD_FAILURE() << "the empirical tier took a surrogate guard";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "surrogate_guard");
+  }
+}
+
+// The request's guard is the one its points are flagged by: thresholds no input can meet with the
+// fallback off flag every point and leave every one to the network (counted), where the
+// deployment's guard would have flagged a few and answered them by their RVEs.
+TEST_F(FeAnnTierTest, ARequestsGuardIsTheOneItsPointsAreFlaggedBy) {
+  const FeAnnTier tier(Options(), *models_);
+  TractionRequest request = Request();
+  request.surrogate_guard.distance_threshold = 1e-12;
+  request.surrogate_guard.spread_threshold = 1e-12;
+  request.surrogate_guard.fallback_enabled = false;
+  const AnnRunReport report = tier.Run(request, {});
+  ASSERT_EQ(report.curve.points.size(), 5u) << report.curve.immobile_reason;
+  EXPECT_EQ(report.fallbacks, 0);
+  EXPECT_GE(report.unanswered_flags, report.network_point_updates - 4)
+      << "every point's every update flagged";
+  EXPECT_EQ(report.curve.tier_version, "fe-ann-3-tiny-nofallback-d1e-12-s1e-12");
+}
+
 // Thresholds no input can meet: every point is flagged at its first increment and answered from
 // then on by the RVE its depth starts with, which is exactly what the fe-de tier computes.
 TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
@@ -279,7 +363,9 @@ TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
 TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeDe) {
   const FeAnnTier tier(Options(), *models_);
   const auto start = std::chrono::steady_clock::now();
-  const AnnRunReport report = tier.Run(Request(), {});
+  std::vector<AnnProgress> progress;
+  const AnnRunReport report =
+      tier.Run(Request(), {}, [&](const AnnProgress& p) { progress.push_back(p); });
   const double seconds = Seconds(start);
   ASSERT_EQ(report.curve.points.size(), fe_de_->curve.points.size())
       << report.curve.immobile_reason;
@@ -309,6 +395,18 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
               static_cast<double>(point_steps - steps_on_rves), 4.0 + 2 * report.fallbacks);
   EXPECT_GT(fe_de_seconds_ / seconds, 4.0) << "the network is not cheaper than the RVEs";
   EXPECT_GT(report.stress_returns, 0) << "no answer was made admissible: the cap and cone are untested";
+  // The run's progress, as it went: how far, and its fallbacks so far.
+  ASSERT_GE(progress.size(), 10u);
+  for (std::size_t i = 1; i < progress.size(); ++i) {
+    EXPECT_GE(progress[i].fraction, progress[i - 1].fraction);
+    EXPECT_GE(progress[i].fallbacks, progress[i - 1].fallbacks);
+    EXPECT_GE(progress[i].network_seconds, progress[i - 1].network_seconds);
+  }
+  EXPECT_LE(progress.back().fraction, 1.0);
+  EXPECT_GT(progress.back().fraction, 0.9);
+  EXPECT_GT(progress.back().fallbacks, 0) << "the fallbacks happen during the run";
+  EXPECT_LE(progress.back().fallbacks, report.fallbacks);
+  EXPECT_LE(progress.back().network_seconds, report.network_seconds);
   EXPECT_LT(worst_pull, 0.05);
   EXPECT_LT(worst_torque, 0.05);
   EXPECT_LT(worst_sinkage, 0.05);
