@@ -209,6 +209,21 @@ class Job:
                              metadata=self._client._metadata)
         return self.message
 
+    def _summary(self, message_type):
+        """The finished job's summary as a `message_type` (waits for the job first)."""
+        self.wait()
+        self.message = _call(self._client._stub.GetJob, pb.GetJobRequest(job_id=self.id),
+                             metadata=self._client._metadata)
+        return json_format.Parse(self.message.summary_json, message_type(), ignore_unknown_fields=True)
+
+    def curve(self, as_dataframe=None):
+        """A curve job's Curve (Client.submit_curve), once the job is done."""
+        return Curve(self._summary(pb.TractionCurve), as_dataframe)
+
+    def model(self):
+        """A training job's registered pb.SurrogateModel (Client.train), once the job is done."""
+        return self._summary(pb.SurrogateModel)
+
     def __repr__(self):
         return f"Job({self.id}, {self.state})"
 
@@ -349,6 +364,20 @@ class Client:
         Pa) with wheel_load_n. The soil: cone_index_kpa, a catalogue soil name, and/or
         soil_parameters {"model": ..., "values": {...}} in the units `gonogo soils` lists. fe-ann: model
         and guard as for submit_map."""
+        request = self._curve_request(tier, vehicle, axle, tyre, wheel_load_n, cone_index_kpa, soil,
+                                      soil_parameters, slip_step, similarity, model, guard)
+        return Curve(_call(self._stub.GetTractionCurve, request, metadata=self._metadata), as_dataframe)
+
+    def submit_curve(self, *, tier, vehicle=None, axle=1, tyre=None, wheel_load_n=None, cone_index_kpa=None,
+                     soil=None, soil_parameters=None, slip_step=0.0, similarity=True, model=None, guard=None):
+        """The same curve as a job (a Job; its curve() once done): how a tier that takes minutes
+        (fe-de, fe-ann; `tiers()` says) computes a curve that is not cached yet. Any tier may."""
+        request = self._curve_request(tier, vehicle, axle, tyre, wheel_load_n, cone_index_kpa, soil,
+                                      soil_parameters, slip_step, similarity, model, guard)
+        return Job(self, _call(self._stub.SubmitCurve, request, metadata=self._metadata))
+
+    def _curve_request(self, tier, vehicle, axle, tyre, wheel_load_n, cone_index_kpa, soil, soil_parameters,
+                       slip_step, similarity, model, guard):
         tyre_message, load = self._wheel(vehicle, axle, tyre, wheel_load_n)
         request = pb.GetTractionCurveRequest(tier=tier, wheel_load_n=load, slip_step=slip_step,
                                              disable_similarity=not similarity, surrogate_model=model or "")
@@ -356,7 +385,22 @@ class Client:
             request.surrogate_guard.CopyFrom(_message_from(guard, pb.SurrogateGuard, "guard"))
         request.tyre.CopyFrom(tyre_message)
         request.soil.CopyFrom(_soil(cone_index_kpa, soil, soil_parameters))
-        return Curve(_call(self._stub.GetTractionCurve, request, metadata=self._metadata), as_dataframe)
+        return request
+
+    # --- fe-ann surrogate models ------------------------------------------------------------------
+    def models(self, soil=""):
+        """The registered surrogate models (of `soil`, or all), newest first: pb.SurrogateModel
+        messages (soil, architecture, data hash, envelope, held-out errors, code version)."""
+        resp = _call(self._stub.ListSurrogateModels, pb.ListSurrogateModelsRequest(soil_name=soil),
+                     metadata=self._metadata)
+        return list(resp.models)
+
+    def train(self, *, soil, **fields):
+        """Trains and registers a surrogate model of `soil`'s RVE as a job on the server's pool (a
+        Job; its model() once done). `fields`: the other pb.TrainSurrogateRequest fields
+        (hidden_widths, from_model, members, epochs, walks, rig_load_n, carried_variables, ...)."""
+        request = _message_from(dict(fields, soil_name=soil), pb.TrainSurrogateRequest, "train")
+        return Job(self, _call(self._stub.TrainSurrogate, request, metadata=self._metadata))
 
     def list_curves(self, *, tier="", soil="", min_cone_index_kpa=0.0, max_cone_index_kpa=0.0,
                     as_dataframe=None):

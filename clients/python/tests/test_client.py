@@ -119,6 +119,34 @@ def test_curve_is_a_structured_array_in_si_units(client, server):
     assert curve.provenance["cache_key"] in keys
 
 
+def test_a_curve_as_a_job_is_the_curve_of_the_query(client):
+    job = client.submit_curve(tier="bekker", vehicle=VEHICLE, soil="lll_dry_sand", slip_step=0.1)
+    curve = job.curve(as_dataframe=False)
+    assert job.state == "DONE"
+    assert curve.provenance["tier"] == "bekker"
+    assert len(curve.points) == 11
+    queried = client.curve(tier="bekker", vehicle=VEHICLE, soil="lll_dry_sand", slip_step=0.1,
+                           as_dataframe=False)
+    assert queried.provenance["cache_key"] == curve.provenance["cache_key"]
+    np.testing.assert_array_equal(queried.points["drawbar_pull_n"], curve.points["drawbar_pull_n"])
+
+
+def test_surrogate_models_and_a_refused_training(client):
+    assert client.models(soil="seed000_sand_rve100") == []
+    with pytest.raises(gonogo.GonogoError) as unknown:
+        client.train(soil="no_such_soil", epochs=5)
+    assert unknown.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert unknown.value.field == "soil_name"
+    with pytest.raises(gonogo.InputError) as misspelt:
+        client.train(soil="seed000_sand_rve100", epoch=5)
+    assert misspelt.value.field == "train"
+    with pytest.raises(gonogo.GonogoError) as no_model:
+        client.submit_curve(tier="fe-ann", tyre={"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1},
+                            wheel_load_n=1000, soil="seed000_sand_rve100")
+    assert no_model.value.code == grpc.StatusCode.FAILED_PRECONDITION
+    assert "gonogo train" in no_model.value.message
+
+
 def test_scalability_rows_per_scale(client):
     report = client.scalability(tier="bekker", vehicle=VEHICLE, soil="lll_dry_sand", scales=(1.0, 0.5))
     assert [r.scale for r in report.rows] == [1.0, 0.5]
