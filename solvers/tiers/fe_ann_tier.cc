@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <utility>
 
 #include "solvers/ann/ann_material.h"
@@ -17,6 +18,14 @@ constexpr char kTrainHint[] =
     "train and register one with `gonogo train --soil NAME` (a job on the server's pool), or "
     "offline with `gonogo-ann --soil NAME --preset PRESET --register DATA_DIR` "
     "(solvers/ann/README.md)";
+
+// A threshold to the 4 significant digits a version names (VersionOf's %.4g), so that two
+// thresholds under one version, and so one cache key, are one threshold.
+double ToVersionDigits(double threshold) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", threshold);
+  return std::strtod(text, nullptr);
+}
 
 // The version of a curve computed with `options`: the fallback and the thresholds change what a
 // model answers (the model's id is in the key apart).
@@ -72,6 +81,8 @@ FeAnnOptions FeAnnTier::OptionsFor(const TractionRequest& request,
   // A request that turns the fallback off has nothing to return from.
   if (!options.fallback_enabled && !guard.return_after_steps) options.return_after_steps = 0;
   if (guard.return_after_steps) options.return_after_steps = *guard.return_after_steps;
+  options.distance_threshold = ToVersionDigits(options.distance_threshold);
+  options.spread_threshold = ToVersionDigits(options.spread_threshold);
   Require(options.return_after_steps == 0 || options.fallback_enabled,
           prefix + "surrogate_guard.return_after_steps",
           "a point returns from its fallback, which this server turns off (gonogo-server "

@@ -110,8 +110,9 @@ class FeAnnTier : public TractionTier {
   void ResolveChoices(TractionRequest& request, const std::string& field_prefix) const override;
 
   const FeAnnOptions& options() const { return options_; }
-  // The tier's options with the request's surrogate guard over them; InputError naming
-  // field_prefix + "surrogate_guard." + the field for a guard these options cannot keep.
+  // The tier's options with the request's surrogate guard over them, the thresholds to the 4
+  // significant digits the version names; InputError naming field_prefix + "surrogate_guard." +
+  // the field for a guard these options cannot keep.
   FeAnnOptions OptionsFor(const TractionRequest& request, const std::string& field_prefix) const;
   // Compute, with the run's figures; the request's model as ResolveChoices leaves it.
   // `on_progress`, when set, is called at each of the rig's progress reports (after

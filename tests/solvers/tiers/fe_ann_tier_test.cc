@@ -279,8 +279,12 @@ TEST_F(FeAnnTierTest, ARequestSetsItsOwnGuardOverTheDeployments) {
   EXPECT_EQ(tier.VersionFor(again), tier.VersionFor(request));
 
   TractionRequest tighter = Request();
-  tighter.surrogate_guard.distance_threshold = 30;
+  tighter.surrogate_guard.distance_threshold = 30.00004;
   EXPECT_EQ(tier.VersionFor(tighter), "fe-ann-3-tiny-d30-s0-return10");
+  tier.ResolveChoices(tighter, "");
+  EXPECT_EQ(*tighter.surrogate_guard.distance_threshold, 30)
+      << "a threshold counts to the digits its version (so its key) names";
+  EXPECT_EQ(tier.OptionsFor(tighter, "").distance_threshold, 30);
 
   const auto refused_field = [&](const FeAnnTier& on, SurrogateGuard guard) -> std::string {
     TractionRequest bad = Request();
