@@ -197,6 +197,35 @@ AnnMaterial::AnnMaterial(std::shared_ptr<const SurrogateEnsemble> ensemble,
                                "read by the reader of the real state, but the model carries it");
     initial_internal_variables_ = CarriedOf(*fallback_->InitialState());
   }
+  if (options_.record_fallback_paths) {
+    if (fallback_ == nullptr) {
+      throw InputError("record_fallback_paths", "there is no model to fall back to");
+    }
+    recorder_ = std::make_shared<const PathRecorder>(fallback_, carried_reader_);
+  }
+  real_ = recorder_ ? recorder_ : fallback_;
+}
+
+const material::MaterialState& AnnMaterial::RealStateOf(const material::MaterialState& state) const {
+  return recorder_ ? PathRecorder::Inner(state) : state;
+}
+
+std::vector<StrainHistory> AnnMaterial::FallbackPaths() const {
+  if (!recorder_) return {};
+  std::vector<StrainHistory> paths = recorder_->Histories();
+  // Longest first, so that a path is compared only with those it could be the start of.
+  std::stable_sort(paths.begin(), paths.end(), [](const StrainHistory& a, const StrainHistory& b) {
+    return a.steps() > b.steps();
+  });
+  std::vector<StrainHistory> kept;
+  for (StrainHistory& path : paths) {
+    const bool start_of_kept = std::any_of(kept.begin(), kept.end(), [&](const StrainHistory& longer) {
+      return longer.initial_stress_pa == path.initial_stress_pa &&
+             std::equal(path.increments.begin(), path.increments.end(), longer.increments.begin());
+    });
+    if (!start_of_kept) kept.push_back(std::move(path));
+  }
+  return kept;
 }
 
 Eigen::VectorXd AnnMaterial::CarriedOf(const material::MaterialState& real_state) const {
@@ -256,7 +285,8 @@ std::unique_ptr<material::MaterialState> AnnMaterial::RestoreState(const std::st
     }
     if (!fallback_bytes.empty()) {
       if (fallback_ == nullptr) throw InputError("state", "a fallen-back point and no fallback");
-      state->fallback = fallback_->RestoreState(fallback_bytes);
+      state->fallback = recorder_ ? recorder_->RestoreUnrecorded(fallback_bytes)
+                                  : fallback_->RestoreState(fallback_bytes);
     }
   } catch (const InputError& e) {
     throw InputError("material.state", e.what());
@@ -292,13 +322,13 @@ std::unique_ptr<AnnState> AnnMaterial::StateFrom(const std::string& real_state_b
 material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const Matrix3& increment,
                                               bool want_tangent) const {
   std::unique_ptr<material::MaterialState> state =
-      committed.origin ? fallback_->RestoreState(*committed.origin) : fallback_->InitialState();
+      committed.origin ? real_->RestoreState(*committed.origin) : real_->InitialState();
   const std::vector<Matrix3> history = committed.Increments();
   for (std::size_t s = 0; s < history.size(); ++s) {
     material::PointIncrement replay;
     replay.displacement_gradient_increment = history[s];
     replay.committed = state.get();
-    std::vector<material::PointResponse> step = fallback_->Update({replay}, false);
+    std::vector<material::PointResponse> step = real_->Update({replay}, false);
     if (step.at(0).status != material::UpdateStatus::kOk) {
       return Failed("fallback: replaying the point's step " + std::to_string(s + 1) + " of " +
                     std::to_string(history.size()) + " failed: " + step.at(0).reason);
@@ -308,7 +338,7 @@ material::PointResponse AnnMaterial::FallBack(const AnnState& committed, const M
   material::PointIncrement now;
   now.displacement_gradient_increment = increment;
   now.committed = state.get();
-  std::vector<material::PointResponse> answer = fallback_->Update({now}, want_tangent);
+  std::vector<material::PointResponse> answer = real_->Update({now}, want_tangent);
   material::PointResponse response = std::move(answer.at(0));
   if (response.status != material::UpdateStatus::kOk) {
     response.reason = "fallback: " + response.reason;
@@ -340,7 +370,7 @@ std::vector<bool> AnnMaterial::WouldFlag(const std::vector<material::PointIncrem
     input.strain_increment = material::StrainToVoigt(split.strain_increment);
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
-    input.internal_variables = CarriedOf(*committed.fallback);
+    input.internal_variables = CarriedOf(RealStateOf(*committed.fallback));
     inputs.push_back(input);
     asked.push_back(k);
   }
@@ -422,7 +452,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       const auto& committed = static_cast<const AnnState&>(*increments[i].committed);
       batch.push_back({increments[i].displacement_gradient_increment, committed.fallback.get()});
     }
-    std::vector<material::PointResponse> real = fallback_->Update(batch, want_tangent);
+    std::vector<material::PointResponse> real = real_->Update(batch, want_tangent);
     const std::vector<bool> would_flag = WouldFlag(increments, on_fallback);
     for (std::size_t k = 0; k < on_fallback.size(); ++k) {
       const std::size_t i = on_fallback[k];
@@ -437,7 +467,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
         next->unflagged_on_fallback = would_flag[k] ? 0 : committed.unflagged_on_fallback + 1;
         if (next->unflagged_on_fallback >= options_.return_after_steps) {
           // Back to the network, from where the real model is now.
-          next->internal_variables = CarriedOf(*next->fallback);
+          next->internal_variables = CarriedOf(RealStateOf(*next->fallback));
           next->fallback.reset();
           next->unflagged_on_fallback = 0;
           log_->RecordReturn();

@@ -30,6 +30,13 @@
 // A point may start from a state of the real model other than its fresh one (StateFrom: an RVE
 // settled at the stress of its depth in an FE bin); its fallback then replays from there.
 //
+// Recording (AnnMaterialOptions::record_fallback_paths): the real model answers through a
+// PathRecorder (path_recorder.h), so that every fallen-back point's path on the real model, from
+// the state it started from (its origin) through the replay to its last step there, is kept
+// (FallbackPaths): the paths on which the ensemble flagged, answered by the RVE itself, which is
+// training data where the model was missing it. The answers are unchanged. A point restored on
+// the real model (a resumed run) is answered but not recorded.
+//
 // An ensemble that carries internal variables (SurrogateEnsemble::carried_variables, e.g. the
 // coordination number) needs them read from the real model's state a point starts from
 // (AnnMaterialOptions::internal_variables); the point then carries them, each step adding the
@@ -43,6 +50,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "solvers/ann/path_recorder.h"
 #include "solvers/ann/point_driver.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/material/constitutive.h"
@@ -59,6 +67,8 @@ struct AnnMaterialOptions {
   // A fallen-back point returns to the network after this many increments in a row the ensemble
   // would not have flagged; 0: never (it stays on the real model).
   int return_after_steps = 0;
+  // Keep the fallen-back points' paths on the real model (above; FallbackPaths).
+  bool record_fallback_paths = false;
 };
 
 // What the points of one material did, for a run's provenance. Thread-safe.
@@ -149,6 +159,11 @@ class AnnMaterial : public material::ConstitutiveModel {
                                               bool want_tangent) const override;
 
   const FallbackLog& log() const { return *log_; }
+  // With record_fallback_paths: each fallen-back point's path on the real model (a StrainHistory
+  // from the point's origin, its carried internal variables recorded by their names), one per
+  // point: a path that is the start of another (a point that returned and fell back again, or
+  // an update its caller discarded) is left out. Empty without recording.
+  std::vector<StrainHistory> FallbackPaths() const;
   const SurrogateEnsemble& ensemble() const { return *ensemble_; }
 
  private:
@@ -158,11 +173,17 @@ class AnnMaterial : public material::ConstitutiveModel {
   // off), in one batched call.
   std::vector<bool> WouldFlag(const std::vector<material::PointIncrement>& increments,
                               const std::vector<std::size_t>& on_fallback) const;
-  // The carried internal variables of a state of the real model.
+  // The carried internal variables of a state of the real model (as `real_` answers it).
   Eigen::VectorXd CarriedOf(const material::MaterialState& real_state) const;
+  // The real model's own state inside a state `real_` made.
+  const material::MaterialState& RealStateOf(const material::MaterialState& state) const;
 
   std::shared_ptr<const SurrogateEnsemble> ensemble_;
   std::shared_ptr<const material::ConstitutiveModel> fallback_;
+  // Recording, the recorder over fallback_; what answers a fallen-back point: recorder_ or
+  // fallback_.
+  std::shared_ptr<const PathRecorder> recorder_;
+  std::shared_ptr<const material::ConstitutiveModel> real_;
   AnnMaterialOptions options_;
   Matrix3 initial_stress_pa_ = Matrix3::Zero();
   InternalVariables carried_reader_;  // options' reader narrowed to the carried variables

@@ -35,7 +35,7 @@ class RecordedState : public material::MaterialState {
   std::string Serialize() const override { return inner->Serialize(); }
 
   std::unique_ptr<material::MaterialState> inner;
-  std::int64_t point = 0;
+  std::int64_t point = 0;  // < 0: not recorded
   std::shared_ptr<const PathRecorder::Step> path;
 };
 
@@ -70,6 +70,18 @@ std::unique_ptr<material::MaterialState> PathRecorder::RestoreState(const std::s
   return Wrap(inner_->RestoreState(bytes));
 }
 
+std::unique_ptr<material::MaterialState> PathRecorder::RestoreUnrecorded(
+    const std::string& bytes) const {
+  auto state = std::make_unique<RecordedState>();
+  state->inner = inner_->RestoreState(bytes);
+  state->point = -1;
+  return state;
+}
+
+const material::MaterialState& PathRecorder::Inner(const material::MaterialState& recorded) {
+  return *static_cast<const RecordedState&>(recorded).inner;
+}
+
 material::ElasticModuli PathRecorder::InitialElasticModuli() const {
   return inner_->InitialElasticModuli();
 }
@@ -86,6 +98,13 @@ std::vector<material::PointResponse> PathRecorder::Update(
   for (std::size_t i = 0; i < increments.size(); ++i) {
     if (responses[i].status != material::UpdateStatus::kOk) continue;
     const auto& committed = static_cast<const RecordedState&>(*increments[i].committed);
+    if (committed.point < 0) {
+      auto next = std::make_unique<RecordedState>();
+      next->inner = std::move(responses[i].state);
+      next->point = committed.point;
+      responses[i].state = std::move(next);
+      continue;
+    }
     auto step = std::make_shared<Step>();
     step->increment = increments[i].displacement_gradient_increment;
     step->stress_pa = material::StressToVoigt(responses[i].stress_pa);

@@ -14,6 +14,11 @@
 //
 // With `internal` (point_driver.h), each step also records what it reads of the inner model's
 // state after the step (an RVE's coordination and fabric).
+//
+// A recorder may also stand in for its inner model inside another model (the fe-ann material
+// records its fallen-back points' RVE paths so): Inner() reads the inner state of a recorder's
+// state, and RestoreUnrecorded() restores a state whose steps are answered but not recorded (a
+// point resumed mid-path, whose path would not start where its history did).
 #pragma once
 
 #include <cstdint>
@@ -41,6 +46,11 @@ class PathRecorder : public material::ConstitutiveModel {
   std::vector<material::PointResponse> Update(const std::vector<material::PointIncrement>& increments,
                                               bool want_tangent) const override;
   material::ElasticModuli InitialElasticModuli() const override;
+
+  // A state of the inner model, answered like any other but never recorded.
+  std::unique_ptr<material::MaterialState> RestoreUnrecorded(const std::string& bytes) const;
+  // The inner model's state inside a state of this recorder.
+  static const material::MaterialState& Inner(const material::MaterialState& recorded);
 
   // Every point's path so far, in the order the points were made; points that took no step are
   // left out.

@@ -170,7 +170,8 @@ std::shared_ptr<const ann::SurrogateEnsemble> FeAnnTier::Load(
 }
 
 AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& context,
-                             const AnnProgressReport& on_progress) const {
+                             const AnnProgressReport& on_progress,
+                             std::vector<ann::StrainHistory>* fallback_paths) const {
   request.Validate();
   const SurrogateModelRecord record = Choose(request, "");
   const FeAnnOptions options = OptionsFor(request, "");
@@ -184,6 +185,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
   material_options.return_after_steps = options.return_after_steps;
   // What a model carrying internal variables takes from a point's settled RVE.
   material_options.internal_variables = RveFabricVariables();
+  material_options.record_fallback_paths = fallback_paths != nullptr;
   std::shared_ptr<const ann::AnnMaterial> material;
   const PointStandInFactory make_stand_in =
       [&](std::shared_ptr<const dem::rve::RveMaterial> template_rve) {
@@ -214,7 +216,14 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     };
   }
   AnnRunReport report;
-  static_cast<FeDeRunReport&>(report) = fe_de_.RunWithStandIn(request, make_stand_in, alone);
+  try {
+    static_cast<FeDeRunReport&>(report) = fe_de_.RunWithStandIn(request, make_stand_in, alone);
+  } catch (...) {
+    // A run stopped early keeps the paths its fallbacks paid for.
+    if (fallback_paths && material) *fallback_paths = material->FallbackPaths();
+    throw;
+  }
+  if (fallback_paths && material) *fallback_paths = material->FallbackPaths();
   report.curve.tier = Name();
   report.curve.tier_version = VersionOf(options);
   report.model_id = record.id;

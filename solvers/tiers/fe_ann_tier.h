@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "solvers/ann/strain_history.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/tiers/fe_de_tier.h"
 
@@ -116,9 +117,14 @@ class FeAnnTier : public TractionTier {
   FeAnnOptions OptionsFor(const TractionRequest& request, const std::string& field_prefix) const;
   // Compute, with the run's figures; the request's model as ResolveChoices leaves it.
   // `on_progress`, when set, is called at each of the rig's progress reports (after
-  // context.progress), on the thread that runs the rig.
+  // context.progress), on the thread that runs the rig. `fallback_paths`, when given, receives
+  // each fallen-back point's path on its RVE (ann::AnnMaterial::FallbackPaths: from the settled
+  // RVE the point started from, its carried variables recorded), also when the run stops early
+  // (cancelled or failed): the paths the model was missing, answered by the RVE itself, which a
+  // model fine-tuned on them (gonogo train --from) no longer misses.
   AnnRunReport Run(TractionRequest request, const ComputeContext& context,
-                   const AnnProgressReport& on_progress = {}) const;
+                   const AnnProgressReport& on_progress = {},
+                   std::vector<ann::StrainHistory>* fallback_paths = nullptr) const;
 
  protected:
   TractionCurve ComputeCurve(const TractionRequest& request,

@@ -4,7 +4,8 @@
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
 //                       [--fe-de-budget-s S] [--carry coordination_number]
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
-//                       [--progress-every-s 60]
+//                       [--progress-every-s 60] [--fe-ann-stop-at F] [--refine-rounds N [--refine-epochs 100]
+//                       [--refine-share F]]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -17,9 +18,17 @@
 //     speedup and the largest differences; with --fe-de-budget-s, a configuration whose fe-de
 //     curve takes hours (default): fe-de run for S seconds and its whole time projected from its
 //     pace (solvers/tiers/fe_de_pace.h, a lower bound), and fe-ann run to the end (or, with
-//     --fe-ann-budget-s, stopped after S seconds); while fe-ann runs, a line every
+//     --fe-ann-budget-s, stopped after S seconds, or with --fe-ann-stop-at F once it has done the
+//     fraction F of its FE steps: the same place for every model); while fe-ann runs, a line every
 //     --progress-every-s seconds: how far, the fallbacks and returns so far, and their seconds
 //     against the network's; --no-fe-de leaves fe-de out;
+//   - with --refine-rounds N, N rounds of the fallbacks' own training data: the fe-ann run records
+//     its fallen-back points' paths on their RVEs (FeAnnTier::Run's fallback_paths), the model
+//     is fine-tuned on its training paths and every fallback path gathered so far
+//     (SurrogateEnsemble::FineTune, --refine-epochs at 1e-3; with --refine-share F the fallback
+//     paths' steps carry the share F of the loss, else each step weighs alike), and the curve is
+//     run again on the
+//     fine-tuned model (to the same budget): its fallbacks, time and curve each round;
 //   - peak resident memory after each part.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
@@ -31,6 +40,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -74,10 +84,11 @@ int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
   int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
-  double fe_ann_budget_s = 0, progress_every_s = 60;
+  double fe_ann_budget_s = 0, progress_every_s = 60, fe_ann_stop_at = 0;
   bool no_fe_de = false;
   std::vector<std::string> carried;
-  int return_after_steps = 0;
+  int return_after_steps = 0, refine_rounds = 0, refine_epochs = 100;
+  double refine_share = 0;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
@@ -104,6 +115,10 @@ int main(int argc, char** argv) {
   app.add_option("--fe-ann-budget-s", fe_ann_budget_s,
                  "> 0: stop the fe-ann curve after this long and print how far it came")
       ->capture_default_str();
+  app.add_option("--fe-ann-stop-at", fe_ann_stop_at,
+                 "> 0: stop the fe-ann curve once this fraction of its FE steps is done")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app.add_option("--progress-every-s", progress_every_s,
                  "seconds between the fe-ann run's progress lines")
       ->capture_default_str();
@@ -114,6 +129,18 @@ int main(int argc, char** argv) {
                  "the fe-ann run's ensemble spread threshold; 0: the model's own")
       ->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads running the training paths")
+      ->capture_default_str();
+  app.add_option("--refine-rounds", refine_rounds,
+                 "rounds of fine-tuning the model on its fe-ann runs' fallback paths, each run "
+                 "again")
+      ->check(CLI::Range(0, 10))
+      ->capture_default_str();
+  app.add_option("--refine-epochs", refine_epochs, "epochs of each round's fine-tuning")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  app.add_option("--refine-share", refine_share,
+                 "the fallback paths' share of the fine-tuning's loss (0: each step alike)")
+      ->check(CLI::Range(0.0, 0.99))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   if (no_fe_de && fe_de_budget_s > 0) {
@@ -185,19 +212,6 @@ int main(int argc, char** argv) {
     const std::string directory = (std::filesystem::temp_directory_path() /
                                    ("gonogo_bench_fe_ann_" + std::to_string(::getpid())))
                                       .string();
-    trained.ensemble.Save(directory);
-    tiers::SurrogateModelRecord record;
-    record.id = "bench";
-    record.directory = directory;
-    record.soil_parameters = CanonicalText(entry->parameters);
-    record.fe_de_preset = preset;
-    tiers::FeAnnOptions options;
-    options.fe_de = fe_de;
-    options.distance_threshold = distance_threshold;
-    options.spread_threshold = spread_threshold;
-    options.return_after_steps = return_after_steps;
-    const tiers::FeAnnTier fe_ann(options, std::make_shared<tiers::ListedSurrogateModels>(
-                                               std::vector<tiers::SurrogateModelRecord>{record}));
     TractionRequest request;
     request.soil.soil_name = soil_name;
     request.tyre.diameter_m = 0.5;
@@ -227,63 +241,134 @@ int main(int argc, char** argv) {
                   de.elements, de.fe_steps, PeakRssMb());
     }
     std::fflush(stdout);
-    start = std::chrono::steady_clock::now();
-    ComputeContext ann_context;
-    ann_context.cancelled = [&] { return fe_ann_budget_s > 0 && Since(start) > fe_ann_budget_s; };
-    double last_line_s = 0;
-    tiers::AnnProgress last_progress;
-    const tiers::AnnProgressReport print_progress = [&](const tiers::AnnProgress& p) {
-      last_progress = p;
-      if (Since(start) - last_line_s < progress_every_s) return;
-      last_line_s = Since(start);
-      std::printf("  fe-ann %.0f s: %.1f %% of the FE steps; %d fallbacks (%lld returned), "
-                  "fallbacks %.1f s, network %.1f s\n",
-                  last_line_s, 100 * p.fraction, p.fallbacks, static_cast<long long>(p.returns),
-                  p.fallback_seconds, p.network_seconds);
-      std::fflush(stdout);
-    };
-    tiers::AnnRunReport ann;
-    try {
-      ann = fe_ann.Run(request, ann_context, print_progress);
-    } catch (const CancelledError&) {
-      const tiers::AnnProgress& p = last_progress;
-      std::printf("fe-ann curve: stopped after %.0f s (--fe-ann-budget-s) at %.1f %% of the FE "
-                  "steps: %d fallbacks (%lld returned), fallbacks %.1f s, network %.1f s, the "
-                  "rest (FE, contact) %.1f s; peak RSS %.0f MB\n",
-                  Since(start), 100 * p.fraction, p.fallbacks, static_cast<long long>(p.returns),
-                  p.fallback_seconds, p.network_seconds,
-                  Since(start) - p.fallback_seconds - p.network_seconds, PeakRssMb());
+
+    // The fe-ann curve on `ensemble`, printed under `label`; its fallen-back points' paths.
+    const auto run_fe_ann = [&](const ann::SurrogateEnsemble& ensemble, const std::string& label) {
       std::filesystem::remove_all(directory);
-      return 0;
-    }
-    const double ann_s = Since(start);
-    const double rest_s =
-        ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
-    char speedup[64] = "fe-de not run";
-    if (!no_fe_de) {
-      std::snprintf(speedup, sizeof speedup, "%.1fx%s", de_s / ann_s,
-                    fe_de_budget_s > 0 ? " of the projection" : "");
-    }
-    std::printf("fe-ann curve: %.2f s wall (%s): network %.2f s (%lld point updates, %.1f us "
-                "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s (%lld returned), "
-                "model load %.3f s, FE and contact %.2f s; peak RSS %.0f MB\n",
-                ann_s, speedup,
-                ann.network_seconds, static_cast<long long>(ann.network_point_updates),
-                1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
-                static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
-                static_cast<long long>(ann.returns), ann.model_load_seconds, rest_s, PeakRssMb());
-    if (fe_de_budget_s > 0 || no_fe_de) {
-      std::printf("fe-ann curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
-                  "sinkage_m\n");
-      for (const TractionPoint& p : ann.curve.points) {
-        std::printf("%.2f,%.1f,%.2f,%.5f\n", p.slip, p.drawbar_pull_n, p.torque_nm, p.sinkage_m);
+      ensemble.Save(directory);
+      tiers::SurrogateModelRecord record;
+      record.id = "bench";
+      record.directory = directory;
+      record.soil_parameters = CanonicalText(entry->parameters);
+      record.fe_de_preset = preset;
+      tiers::FeAnnOptions options;
+      options.fe_de = fe_de;
+      options.distance_threshold = distance_threshold;
+      options.spread_threshold = spread_threshold;
+      options.return_after_steps = return_after_steps;
+      const tiers::FeAnnTier fe_ann(options,
+                                    std::make_shared<tiers::ListedSurrogateModels>(
+                                        std::vector<tiers::SurrogateModelRecord>{record}));
+      const auto run_start = std::chrono::steady_clock::now();
+      double last_line_s = 0;
+      tiers::AnnProgress last_progress;
+      ComputeContext ann_context;
+      ann_context.cancelled = [&] {
+        return (fe_ann_budget_s > 0 && Since(run_start) > fe_ann_budget_s) ||
+               (fe_ann_stop_at > 0 && last_progress.fraction >= fe_ann_stop_at);
+      };
+      const tiers::AnnProgressReport print_progress = [&](const tiers::AnnProgress& p) {
+        last_progress = p;
+        if (Since(run_start) - last_line_s < progress_every_s) return;
+        last_line_s = Since(run_start);
+        std::printf("  %s %.0f s: %.1f %% of the FE steps; %d fallbacks (%lld returned), "
+                    "fallbacks %.1f s, network %.1f s\n",
+                    label.c_str(), last_line_s, 100 * p.fraction, p.fallbacks,
+                    static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds);
+        std::fflush(stdout);
+      };
+      std::vector<ann::StrainHistory> fallback_paths;
+      tiers::AnnRunReport ann;
+      try {
+        ann = fe_ann.Run(request, ann_context, print_progress,
+                         refine_rounds > 0 ? &fallback_paths : nullptr);
+      } catch (const CancelledError&) {
+        const tiers::AnnProgress& p = last_progress;
+        std::printf("%s curve: stopped after %.0f s at %.1f %% of the FE "
+                    "steps: %d fallbacks (%lld returned), fallbacks %.1f s, network %.1f s, the "
+                    "rest (FE, contact) %.1f s; %zu fallback paths; peak RSS %.0f MB\n",
+                    label.c_str(), Since(run_start), 100 * p.fraction, p.fallbacks,
+                    static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds,
+                    Since(run_start) - p.fallback_seconds - p.network_seconds,
+                    fallback_paths.size(), PeakRssMb());
+        std::fflush(stdout);
+        return fallback_paths;
       }
-    } else {
-      const tiers::CurveDifference worst = tiers::WorstDifference(ann.curve, de.curve, request);
-      std::printf("fe-ann against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
-                  "%.1f %% of rW, sinkage %.1f %% of r\n",
-                  100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
-                  100 * worst.sinkage_over_r);
+      const double ann_s = Since(run_start);
+      const double rest_s =
+          ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
+      char speedup[64] = "fe-de not run";
+      if (!no_fe_de) {
+        std::snprintf(speedup, sizeof speedup, "%.1fx%s", de_s / ann_s,
+                      fe_de_budget_s > 0 ? " of the projection" : "");
+      }
+      std::printf("%s curve: %.2f s wall (%s): network %.2f s (%lld point updates, %.1f us "
+                  "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s "
+                  "(%lld returned; %zu fallback paths), model load %.3f s, FE and contact %.2f s; "
+                  "peak RSS %.0f MB\n",
+                  label.c_str(), ann_s, speedup, ann.network_seconds,
+                  static_cast<long long>(ann.network_point_updates),
+                  1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
+                  static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
+                  static_cast<long long>(ann.returns), fallback_paths.size(),
+                  ann.model_load_seconds, rest_s, PeakRssMb());
+      if (fe_de_budget_s > 0 || no_fe_de) {
+        std::printf("%s curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
+                    "sinkage_m\n",
+                    label.c_str());
+        for (const TractionPoint& p : ann.curve.points) {
+          std::printf("%.2f,%.1f,%.2f,%.5f\n", p.slip, p.drawbar_pull_n, p.torque_nm, p.sinkage_m);
+        }
+      } else {
+        const tiers::CurveDifference worst = tiers::WorstDifference(ann.curve, de.curve, request);
+        std::printf("%s against fe-de, worst over the slips: drawbar pull %.1f %% of W, torque "
+                    "%.1f %% of rW, sinkage %.1f %% of r\n",
+                    label.c_str(), 100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
+                    100 * worst.sinkage_over_r);
+      }
+      std::fflush(stdout);
+      return fallback_paths;
+    };
+
+    std::vector<ann::StrainHistory> gathered = run_fe_ann(trained.ensemble, "fe-ann");
+    std::unique_ptr<ann::SurrogateEnsemble> refined;
+    for (int round = 1; round <= refine_rounds; ++round) {
+      // The model before this round, fine-tuned on its training paths and every fallback path so
+      // far (the paths the envelope missed, answered by the RVEs).
+      std::vector<ann::StrainHistory> data = trained.training;
+      data.insert(data.end(), gathered.begin(), gathered.end());
+      ann::TrainingOptions tuning = recipe.training;
+      tuning.epochs = refine_epochs;
+      tuning.learning_rate = 1e-3;
+      tuning.batch_size = 64;
+      if (refine_share > 0 && !gathered.empty()) {
+        // Each fallback path's steps weighed so that together they carry refine_share of the loss.
+        double training_steps = 0, fallback_steps = 0;
+        for (const ann::StrainHistory& path : trained.training) training_steps += path.steps();
+        for (const ann::StrainHistory& path : gathered) fallback_steps += path.steps();
+        tuning.history_weights.assign(trained.training.size(), 1.0);
+        tuning.history_weights.resize(
+            data.size(), refine_share * training_steps / ((1 - refine_share) * fallback_steps));
+      }
+      const auto tune_start = std::chrono::steady_clock::now();
+      std::vector<ann::TrainingReport> reports;
+      auto tuned = std::make_unique<ann::SurrogateEnsemble>(ann::SurrogateEnsemble::FineTune(
+          refined ? *refined : trained.ensemble, data, tuning, &reports));
+      double worst_held_out = 0;
+      for (const ann::StrainHistory& history : trained.held_out) {
+        worst_held_out = std::max(worst_held_out, ann::ReplayError(*tuned, history));
+      }
+      std::printf("refine round %d: fine-tuned on %zu training paths and %zu fallback paths "
+                  "(%lld samples), %d epochs in %.1f s; worst held-out %.1f %%; distance "
+                  "threshold %.2f\n",
+                  round, trained.training.size(), gathered.size(),
+                  static_cast<long long>(reports.front().samples), refine_epochs,
+                  Since(tune_start), 100 * worst_held_out, tuned->distance_threshold());
+      std::fflush(stdout);
+      refined = std::move(tuned);
+      const std::vector<ann::StrainHistory> more =
+          run_fe_ann(*refined, "fe-ann round " + std::to_string(round));
+      gathered.insert(gathered.end(), more.begin(), more.end());
     }
     std::filesystem::remove_all(directory);
     return 0;

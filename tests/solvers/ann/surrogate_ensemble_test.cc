@@ -443,6 +443,97 @@ TEST(AnnMaterial, AFallenBackPointReturnsToTheNetworkOnceBackInside) {
   EXPECT_EQ(staying.log().returns(), 0);
 }
 
+// Recording: each fallen-back point's path on the real model is kept, from the point's start
+// through the replay to its last step there, bit for bit the soil's along the same increments;
+// the answers are those of the material that does not record; a point on the network leaves no
+// path; a point that returns and falls back again leaves one path (the longer); a fallen-back
+// state restored from its bytes is answered and not recorded.
+TEST(AnnMaterial, RecordsEachFallenBackPointsPathOnTheRealModel) {
+  Matrix3 increment = Matrix3::Zero();
+  increment(2, 2) = -1e-4;
+  increment(0, 2) = 2e-4;
+  std::vector<Matrix3> leaving(5, increment);
+  leaving.push_back(increment * 40);  // leaves the envelope
+  for (int s = 0; s < 6; ++s) leaving.push_back(increment * 0.5);
+  // Both points in each batch (the second takes `increment` at every step), as the FE asks; the stresses after each step, by point.
+  const auto walk = [&](const material::ConstitutiveModel& model,
+                        std::vector<std::unique_ptr<material::MaterialState>> states,
+                        std::size_t first_step) {
+    std::vector<std::vector<Matrix3>> stresses(2);
+    for (std::size_t s = first_step; s < leaving.size(); ++s) {
+      std::vector<material::PointResponse> answers =
+          model.Update({{leaving[s], states[0].get()}, {increment, states[1].get()}}, false);
+      for (int p = 0; p < 2; ++p) {
+        EXPECT_EQ(answers[p].status, material::UpdateStatus::kOk) << answers[p].reason;
+        if (answers[p].status != material::UpdateStatus::kOk) return stresses;
+        states[p] = std::move(answers[p].state);
+        stresses[p].push_back(answers[p].stress_pa);
+      }
+    }
+    return stresses;
+  };
+  const auto fresh = [](const material::ConstitutiveModel& model) {
+    std::vector<std::unique_ptr<material::MaterialState>> states;
+    states.push_back(model.InitialState());
+    states.push_back(model.InitialState());
+    return states;
+  };
+  AnnMaterialOptions recording;
+  recording.record_fallback_paths = true;
+  const AnnMaterial recorded(SharedEnsemble(), SharedSoil(), recording);
+  const AnnMaterial plain(SharedEnsemble(), SharedSoil());
+  const auto recorded_stresses = walk(recorded, fresh(recorded), 0);
+  EXPECT_EQ(recorded_stresses, walk(plain, fresh(plain), 0)) << "recording changes no answer";
+  EXPECT_TRUE(plain.FallbackPaths().empty());
+  const std::vector<StrainHistory> paths = recorded.FallbackPaths();
+  ASSERT_EQ(paths.size(), 1u) << "the point that left; the one on the network leaves no path";
+  const StrainHistory& path = paths[0];
+  ASSERT_EQ(path.increments, leaving);
+  EXPECT_EQ(path.initial_stress_pa,
+            material::StressOfState(Soil(), *Soil().InitialState(), "soil's start"));
+  // The soil's own path along the same increments, bit for bit.
+  std::unique_ptr<material::MaterialState> soil = Soil().InitialState();
+  for (std::size_t s = 0; s < leaving.size(); ++s) {
+    std::vector<material::PointResponse> step = Soil().Update({{leaving[s], soil.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk);
+    soil = std::move(step[0].state);
+    EXPECT_EQ(path.stresses_pa[s], material::StressToVoigt(step[0].stress_pa)) << "step " << s + 1;
+  }
+  EXPECT_TRUE(path.internal_variable_names.empty()) << "the ensemble carries none";
+  // A point that returns and falls back again leaves one path, its whole history.
+  AnnMaterialOptions returning = recording;
+  returning.return_after_steps = 3;
+  const AnnMaterial twice(SharedEnsemble(), SharedSoil(), returning);
+  leaving.push_back(increment * 40);  // leaves again, after its return at step 9
+  leaving.push_back(increment * 0.5);
+  walk(twice, fresh(twice), 0);
+  EXPECT_EQ(twice.log().fallbacks().size(), 2u);
+  EXPECT_EQ(twice.log().returns(), 1);
+  const std::vector<StrainHistory> twice_paths = twice.FallbackPaths();
+  ASSERT_EQ(twice_paths.size(), 1u);
+  EXPECT_EQ(twice_paths[0].increments, leaving);
+  // Restored from its bytes mid-fallback (a resumed run), a point goes on unrecorded.
+  const AnnMaterial resumed(SharedEnsemble(), SharedSoil(), recording);
+  std::unique_ptr<material::MaterialState> state = resumed.InitialState();
+  for (std::size_t s = 0; s < 7; ++s) {
+    std::vector<material::PointResponse> step = resumed.Update({{leaving[s], state.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk) << step[0].reason;
+    state = std::move(step[0].state);
+  }
+  ASSERT_EQ(resumed.FallbackPaths().size(), 1u);
+  std::vector<std::unique_ptr<material::MaterialState>> restored;
+  restored.push_back(resumed.RestoreState(state->Serialize()));
+  restored.push_back(resumed.InitialState());
+  ASSERT_NE(static_cast<const AnnState&>(*restored[0]).fallback, nullptr);
+  walk(resumed, std::move(restored), 7);
+  ASSERT_EQ(resumed.FallbackPaths().size(), 1u);
+  EXPECT_EQ(resumed.FallbackPaths()[0].steps(), 7u) << "the path before the restore, no more";
+  // Recording needs a model to record.
+  AnnMaterialOptions nothing_to_record = recording;
+  nothing_to_record.fallback_enabled = false;
+  EXPECT_THROW(AnnMaterial(SharedEnsemble(), nullptr, nothing_to_record), InputError);
+}
+
 // An ensemble that carries an internal variable (Drucker-Prager's equivalent plastic strain):
 // its envelope covers the carried input, it saves and loads whole, and the ANN material takes the
 // variable from the real model's state a point starts from and carries it step by step, close to

@@ -340,14 +340,25 @@ TEST_F(FeAnnTierTest, ARequestsGuardIsTheOneItsPointsAreFlaggedBy) {
   EXPECT_EQ(report.curve.tier_version, "fe-ann-3-tiny-nofallback-d1e-12-s1e-12");
 }
 
+// The fe-de rig run with every point's path recorded (RecordRigPaths), once for the suite.
+const RecordedRigRun& RecordedFeDeRun() {
+  static const RecordedRigRun* recorded =
+      new RecordedRigRun(RecordRigPaths(FeDeTier(TinyFeDeOptions()), Request()));
+  return *recorded;
+}
+
 // Thresholds no input can meet: every point is flagged at its first increment and answered from
-// then on by the RVE its depth starts with, which is exactly what the fe-de tier computes.
+// then on by the RVE its depth starts with, which is exactly what the fe-de tier computes. The
+// run records its fallen-back points' paths (FeAnnTier::Run's fallback_paths), which changes
+// nothing: the curve is still fe-de's bit for bit, and each point's path is the path its RVE
+// takes in the fe-de run, bit for bit, with the coordination number the model carries recorded.
 TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
   FeAnnOptions options = Options();
   options.distance_threshold = 1e-12;
   options.spread_threshold = 1e-12;
   const FeAnnTier tier(options, *models_);
-  const AnnRunReport report = tier.Run(Request(), {});
+  std::vector<ann::StrainHistory> fallback_paths;
+  const AnnRunReport report = tier.Run(Request(), {}, {}, &fallback_paths);
   ASSERT_EQ(report.curve.points.size(), 5u) << report.curve.immobile_reason;
   EXPECT_GE(report.fallbacks, report.elements);
   EXPECT_LE(report.fallbacks, report.elements + 4);
@@ -355,6 +366,27 @@ TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
                           [](std::int64_t step) { return step == 0; }));
   EXPECT_TRUE(SameBits(report.curve, fe_de_->curve)) << "the RVEs' curve differs from fe-de's";
   EXPECT_EQ(report.curve.tier, "fe-ann");
+  const RecordedRigRun& fe_de = RecordedFeDeRun();
+  EXPECT_GE(fallback_paths.size(), fe_de.paths.size());
+  EXPECT_LE(fallback_paths.size(), static_cast<std::size_t>(report.fallbacks));
+  for (const ann::StrainHistory& path : fallback_paths) {
+    ASSERT_EQ(path.internal_variable_names, std::vector<std::string>{"coordination_number"});
+    ASSERT_EQ(path.internal_variables.size(), path.steps());
+    ASSERT_EQ(path.initial_internal_variables.size(), 1u);
+    EXPECT_GT(path.initial_internal_variables[0], 2.0) << "a settled packing's coordination";
+  }
+  std::size_t matched = 0;
+  for (const ann::StrainHistory& rig_path : fe_de.paths) {
+    const auto same = std::find_if(
+        fallback_paths.begin(), fallback_paths.end(), [&](const ann::StrainHistory& path) {
+          return path.initial_stress_pa == rig_path.initial_stress_pa &&
+                 path.increments == rig_path.increments && path.stresses_pa == rig_path.stresses_pa;
+        });
+    matched += same != fallback_paths.end() ? 1 : 0;
+  }
+  std::cout << "  " << fallback_paths.size() << " fallen-back points' paths recorded; "
+            << matched << " of the fe-de run's " << fe_de.paths.size() << " paths among them\n";
+  EXPECT_EQ(matched, fe_de.paths.size());
 }
 
 // The network answers the points of every FE step, all but a few that leave its envelope under
@@ -368,8 +400,9 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   const FeAnnTier tier(Options(), *models_);
   const auto start = std::chrono::steady_clock::now();
   std::vector<AnnProgress> progress;
-  const AnnRunReport report =
-      tier.Run(Request(), {}, [&](const AnnProgress& p) { progress.push_back(p); });
+  std::vector<ann::StrainHistory> fallback_paths;
+  const AnnRunReport report = tier.Run(
+      Request(), {}, [&](const AnnProgress& p) { progress.push_back(p); }, &fallback_paths);
   const double seconds = Seconds(start);
   ASSERT_EQ(report.curve.points.size(), fe_de_->curve.points.size())
       << report.curve.immobile_reason;
@@ -411,6 +444,15 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   EXPECT_GT(progress.back().fallbacks, 0) << "the fallbacks happen during the run";
   EXPECT_LE(progress.back().fallbacks, report.fallbacks);
   EXPECT_LE(progress.back().network_seconds, report.network_seconds);
+  // Each fallen-back point's path on its RVE, from its start to the end of its bin's run.
+  ASSERT_GE(fallback_paths.size(), 1u);
+  EXPECT_LE(fallback_paths.size(), static_cast<std::size_t>(report.fallbacks));
+  const std::int64_t first_fallback =
+      *std::min_element(report.fallback_steps.begin(), report.fallback_steps.end());
+  for (const ann::StrainHistory& path : fallback_paths) {
+    EXPECT_GT(static_cast<std::int64_t>(path.steps()), first_fallback);
+    EXPECT_LE(path.steps(), static_cast<std::size_t>(report.fe_steps) + 2);
+  }
   EXPECT_LT(worst_pull, 0.05);
   EXPECT_LT(worst_torque, 0.05);
   EXPECT_LT(worst_sinkage, 0.05);
@@ -451,7 +493,7 @@ TEST_F(FeAnnTierTest, AWheelItWasNotTrainedNearIsComparedWithFeDe) {
 // the run: the recorded run's curve is the fe-de curve bit for bit, and every point of the bin has
 // a path of every FE step, starting at its geostatic stress.
 TEST_F(FeAnnTierTest, RecordsTheRigRunsPointPathsWithoutChangingItsCurve) {
-  const RecordedRigRun recorded = RecordRigPaths(FeDeTier(TinyFeDeOptions()), Request());
+  const RecordedRigRun& recorded = RecordedFeDeRun();
   EXPECT_TRUE(SameBits(recorded.run.curve, fe_de_->curve));
   ASSERT_EQ(recorded.paths.size(), static_cast<std::size_t>(recorded.run.elements));
   double deepest_start_pa = 0, largest_stress_pa = 0;
