@@ -237,6 +237,12 @@ Command AddTrainCommand(CLI::App& parent) {
            "recorded paths added to the training set, evenly spread over the bin; half as many "
            "more are held out [default: 8]")
       ->type_name("N");
+  train->add_option_function<double>(
+           "--fallback-paths-share", [&r](double v) { r.set_fallback_paths_share(v); },
+           "also train on the fallback paths kept from fe-ann curves (where their points left a "
+           "model's envelope, the paths their RVEs took), their steps carrying this share of the "
+           "loss, in [0, 0.99] [default: 0, left out]")
+      ->type_name("F");
   train->add_option_function<std::string>(
            "--name", [&r](const std::string& v) { r.set_name(v); }, "shown in job lists")
       ->type_name("TEXT");

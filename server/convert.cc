@@ -83,6 +83,7 @@ v1::WorkerResult ToWorkerResult(const TaskResult& r) {
   w.set_immobile_reason(r.curve.immobile_reason);
   for (const TractionPoint& p : r.curve.points) *w.add_points() = ToProto(p);
   w.set_training_output(r.training_output);
+  for (const std::string& history : r.training_histories) w.add_training_histories(history);
   return w;
 }
 
@@ -105,6 +106,7 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   r.computed_by = computed_by;
   r.compute_seconds = w.compute_seconds();
   r.training_output = w.training_output();
+  r.training_histories.assign(w.training_histories().begin(), w.training_histories().end());
   return r;
 }
 

@@ -141,6 +141,14 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
       const size_t i = it->second;
       outstanding.erase(it);
       Resolution& r = out[i];
+      if (training_history_keeper_ && !result.training_histories.empty()) {
+        try {
+          training_history_keeper_(tier, tasks[i], result);
+        } catch (const std::exception& e) {
+          spdlog::warn("traction task {} ({}): its {} paths for training were not kept: {}",
+                       result.task_id, tier.Name(), result.training_histories.size(), e.what());
+        }
+      }
       if (!result.cancelled && !checkpoint_root_.empty()) {
         std::error_code ignored;  // stored or failed: the restart files are of no more use
         std::filesystem::remove_all(CheckpointDirectory(checkpoint_root_, keys[i]), ignored);

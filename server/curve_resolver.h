@@ -102,12 +102,22 @@ class CurveResolver {
   // last checkpoint. The directory is removed once the curve is stored or the task failed; a
   // cancelled task keeps it. Empty root (the default): no checkpoints.
   void set_checkpoint_root(std::string root) { checkpoint_root_ = std::move(root); }
+  // What a computed task's tier kept for training (TaskResult::training_histories: the fe-ann
+  // tier's fallback paths) goes to `keeper` as the task ends, computed, failed or cancelled (on
+  // the resolving thread; server/fallback_paths.h). A keeper's error is logged, never the
+  // task's. Unset (the default): they are dropped.
+  using TrainingHistoryKeeper =
+      std::function<void(const TractionTier&, const CurveTask&, const TaskResult&)>;
+  void set_training_history_keeper(TrainingHistoryKeeper keeper) {
+    training_history_keeper_ = std::move(keeper);
+  }
 
  private:
   cache::CurveStore& store_;
   WorkerPool& pool_;
   std::atomic<uint64_t> next_task_id_{1};
   std::string checkpoint_root_;
+  TrainingHistoryKeeper training_history_keeper_;
 };
 
 // Tasks expected to take at least this long get a restart directory (set_checkpoint_root).

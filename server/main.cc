@@ -35,6 +35,7 @@
 #include <thread>
 
 #include "cache/database.h"
+#include "server/fallback_paths.h"
 #include "server/identity.h"
 #include "server/job_manager.h"
 #include "server/mpi_pool.h"
@@ -349,6 +350,17 @@ int Serve(const Options& o, const gonogo::TierRegistry& tiers, gonogo::server::W
   // Restart files of long curves (fe-de); the worker ranks read them too, so under MPI the data
   // directory must be on a file system they share.
   resolver.set_checkpoint_root((std::filesystem::path(o.data_dir) / "checkpoints").string());
+  // An fe-ann curve's fallback paths join its soil's dataset (gonogo train --fallback-paths-share).
+  resolver.set_training_history_keeper(
+      [&db, preset = o.tier_options.fe_de_preset,
+       rve_version = tiers.Find("fe-de") ? tiers.Find("fe-de")->Version() : std::string()](
+          const gonogo::TractionTier&, const gonogo::server::CurveTask& task,
+          const gonogo::server::TaskResult& result) {
+        const int kept = server::KeepFallbackPaths(db, preset, rve_version, task, result);
+        if (kept > 0) {
+          spdlog::info("kept {} fallback paths of curve {} for training", kept, task.key);
+        }
+      });
   server::JobManager jobs(config, db, tiers, resolver);
   const int orphans = jobs.CollectOrphanUploads();
   if (orphans > 0) spdlog::info("removed the files of {} uploads that never became a job", orphans);

@@ -30,7 +30,11 @@ TaskResult RunTask(const TierRegistry& tiers, const TaskSpec& task,
     const TractionTier& tier = tiers.Get(task.tier);
     task.request.Validate();
     if (context.Cancelled()) throw CancelledError();  // cancelled while queued
-    result.curve = tier.Compute(task.request, context);
+    ComputeContext keeping = context;
+    keeping.keep_training_histories = [&result](std::vector<std::string> histories) {
+      result.training_histories = std::move(histories);
+    };
+    result.curve = tier.Compute(task.request, keeping);
     result.ok = true;
   } catch (...) {
     const ClassifiedError e = ClassifyCurrentException();

@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <condition_variable>
 #include <cstdio>
@@ -25,6 +26,7 @@
 
 #include "cache/dataset_store.h"
 #include "server/convert.h"
+#include "server/fallback_paths.h"
 #include "server/job_manager.h"
 #include "server/job_records.h"
 #include "server/training_work.h"
@@ -293,6 +295,31 @@ std::string RigPathKey(const std::string& soil_parameters, const std::string& pr
 }
 
 // "rig 1000 N point 3": kept path k (from 0) of a rig run.
+// The dataset a training's paths go to: the soil's at the configuration, followed by "+NAME" for
+// each internal variable the paths record.
+std::string DatasetOf(const tiers::CatalogueEntry& soil, const std::string& preset,
+                      const std::vector<std::string>& recorded) {
+  std::string dataset = cache::DatasetId(soil.soil, preset, CanonicalText(soil.parameters));
+  for (const std::string& name : recorded) dataset += "+" + name;
+  return dataset;
+}
+
+// The dataset's fallback paths (server/fallback_paths.h), in the order they were kept.
+std::vector<cache::StoredHistory> FallbackPathsOf(cache::Database& db, const std::string& dataset) {
+  std::vector<cache::StoredHistory> paths;
+  for (cache::StoredHistory& row : cache::DatasetStore(db).Histories(dataset, cache::kTrainingRole)) {
+    if (row.path_kind == kFallbackPathKind) paths.push_back(std::move(row));
+  }
+  return paths;
+}
+
+// What a training request's fallback_paths_share may be.
+void ValidateFallbackShare(const v1::TrainSurrogateRequest& request) {
+  Require(std::isfinite(request.fallback_paths_share()) && request.fallback_paths_share() >= 0 &&
+              request.fallback_paths_share() <= 0.99,
+          "fallback_paths_share", "must be in [0, 0.99] (0: the fallback paths are left out)");
+}
+
 std::string RigPathName(const RigRecipe& rig, int k) {
   char text[64];
   std::snprintf(text, sizeof text, "rig %g N point %d", rig.load_n, k + 1);
@@ -309,8 +336,10 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
   const tiers::CatalogueEntry& soil = RveSoil(request.soil_name());
   Require(request.from_model().size() <= 64, "from_model", "must be at most 64 characters");
   const bool fine_tuning = !request.from_model().empty();
-  RecipeOf(request, fine_tuning);
+  const tiers::SurrogateRecipe recipe = RecipeOf(request, fine_tuning);
   RigRecipeOf(request);
+  ValidateFallbackShare(request);
+  std::vector<std::string> recorded = recipe.architecture.carried_variables;
   if (fine_tuning) {
     const auto base =
         tiers::SurrogateRegistry(config_.models_dir).Describe(request.from_model());
@@ -319,6 +348,16 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
     Require(base->fe_de_preset == config_.fe_de_preset, "from_model",
             "model '" + base->id + "' was trained on RVEs of the " + base->fe_de_preset +
                 " configuration; this server runs " + config_.fe_de_preset);
+    recorded = CarriedOfArchitecture(base->architecture);
+  }
+  if (request.fallback_paths_share() > 0) {
+    const std::string dataset = DatasetOf(soil, config_.fe_de_preset, recorded);
+    if (FallbackPathsOf(db_, dataset).empty()) {
+      throw PreconditionError("fallback_paths_share",
+                              "dataset " + dataset + " holds no fallback paths: they are kept "
+                              "from fe-ann curves whose points fell back (gonogo curve --tier "
+                              "fe-ann --model ID)");
+    }
   }
   cache::JobRecord rec;
   rec.id = id;
@@ -372,8 +411,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     const std::vector<std::string> recorded = fine_tuning
                                                   ? CarriedOfArchitecture(base->architecture)
                                                   : recipe.architecture.carried_variables;
-    std::string dataset = cache::DatasetId(soil.soil, preset, soil_text);
-    for (const std::string& name : recorded) dataset += "+" + name;
+    const std::string dataset = DatasetOf(soil, preset, recorded);
 
     // 1. The strain paths: the stored ones from the dataset, the others on the pool.
     std::vector<PlannedPath> planned;
@@ -527,6 +565,25 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       }
     }
 
+    // The fallback paths kept from fe-ann curves, weighed to carry the asked share of the loss.
+    const double fallback_share = request.fallback_paths_share();
+    int fallback_paths = 0;
+    if (fallback_share > 0) {
+      const std::vector<cache::StoredHistory> rows = FallbackPathsOf(db_, dataset);
+      Require(!rows.empty(), "fallback_paths_share", "dataset " + dataset + " holds no fallback paths");
+      double recipe_steps = 0, fallback_steps = 0;
+      for (const ann::StrainHistory& history : training) recipe_steps += history.steps();
+      for (const cache::StoredHistory& row : rows) fallback_steps += static_cast<double>(row.steps);
+      const double weight = fallback_share * recipe_steps / ((1 - fallback_share) * fallback_steps);
+      for (int k = 0; k < member_work.histories_size(); ++k) member_work.add_history_weights(1.0);
+      for (const cache::StoredHistory& row : rows) {
+        training.push_back(ann::ParseHistory(row.history));
+        member_work.add_histories(row.history);
+        member_work.add_history_weights(weight);
+      }
+      fallback_paths = static_cast<int>(rows.size());
+    }
+
     // 2. The members, one task each.
     member_work.set_epochs(recipe.training.epochs);
     member_work.set_batch_size(recipe.training.batch_size);
@@ -553,7 +610,10 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     const auto members_message = [&] {
       return "training the ensemble: " + std::to_string(members_done) + " of " +
              std::to_string(members) + " members (" + std::to_string(training.size()) +
-             " training paths)";
+             " training paths" +
+             (fallback_paths > 0 ? ", " + std::to_string(fallback_paths) + " of them fallback paths"
+                                 : std::string()) +
+             ")";
     };
     report(0.8, members_message(), true);
     const auto training_start = std::chrono::steady_clock::now();

@@ -56,6 +56,7 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
   options.seed = work.seed();
   options.threads = 1;  // bit-reproducible; the pool's parallelism is one member per rank
   options.stop = [&] { return context.Cancelled(); };
+  options.history_weights.assign(work.history_weights().begin(), work.history_weights().end());
   options.Validate("training.train_member.");
   ann::StressSurrogate member = [&] {
     if (!work.base_member_path().empty()) {

@@ -49,6 +49,9 @@ struct TaskResult {
   std::string computed_by;    // "rank N", "ranks N,M" for a rank group, or "thread"
   double compute_seconds = 0;
   std::string training_output;  // a training task's answer (TrainingWork)
+  // What a curve's tier kept for training (ComputeContext::keep_training_histories), also of a
+  // task that failed or was cancelled: SerializeHistory each.
+  std::vector<std::string> training_histories;
 };
 
 using TaskCallback = std::function<void(TaskResult)>;

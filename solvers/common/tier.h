@@ -41,6 +41,11 @@ struct ComputeContext {
   // empty: no checkpoints. On every rank of a group it names the same directory (a file system
   // the group shares).
   std::string checkpoint_dir;
+  // Where a tier hands on what it computed besides its curve that a surrogate can learn from (the
+  // fe-ann tier: its fallen-back points' paths on their RVEs, as SerializeHistory bytes,
+  // solvers/ann/strain_history.h), called once at the end of the computation, also when it stops
+  // early; empty: nothing is kept (and nothing recorded for it).
+  std::function<void(std::vector<std::string> histories)> keep_training_histories;
 
   bool Cancelled() const { return cancelled && cancelled(); }
   void Report(double fraction) const {

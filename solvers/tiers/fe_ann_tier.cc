@@ -249,7 +249,24 @@ TractionCurve FeAnnTier::ComputeCurve(const TractionRequest& request,
   int group_rank = 0;
   if (context.communicator != MPI_COMM_NULL) MPI_Comm_rank(context.communicator, &group_rank);
   if (group_rank != 0) return {};  // one rank computes; a group's others have nothing to do
-  return Run(request, context).curve;
+  if (!context.keep_training_histories) return Run(request, context).curve;
+  // The fallen-back points' paths go to the sink however the run ends: they were paid for.
+  std::vector<ann::StrainHistory> fallback_paths;
+  const auto hand_on = [&] {
+    std::vector<std::string> bytes;
+    for (const ann::StrainHistory& path : fallback_paths) {
+      bytes.push_back(ann::SerializeHistory(path));
+    }
+    context.keep_training_histories(std::move(bytes));
+  };
+  try {
+    TractionCurve curve = Run(request, context, {}, &fallback_paths).curve;
+    hand_on();
+    return curve;
+  } catch (...) {
+    hand_on();
+    throw;
+  }
 }
 
 std::optional<SurrogateModelRecord> ListedSurrogateModels::Find(const std::string& id) const {

@@ -127,6 +127,8 @@ class FeAnnTier : public TractionTier {
                    std::vector<ann::StrainHistory>* fallback_paths = nullptr) const;
 
  protected:
+  // Run's curve; with context.keep_training_histories, the run's fallback paths are handed there
+  // (serialised), however the run ends.
   TractionCurve ComputeCurve(const TractionRequest& request,
                              const ComputeContext& context) const override;
 

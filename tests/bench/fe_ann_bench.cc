@@ -5,7 +5,7 @@
 //                       [--fe-de-budget-s S] [--carry coordination_number]
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
 //                       [--progress-every-s 60] [--fe-ann-stop-at F] [--refine-rounds N [--refine-epochs 100]
-//                       [--refine-share F]]
+//                       [--refine-share F] [--refine-stop-at F]]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -27,8 +27,8 @@
 //     is fine-tuned on its training paths and every fallback path gathered so far
 //     (SurrogateEnsemble::FineTune, --refine-epochs at 1e-3; with --refine-share F the fallback
 //     paths' steps carry the share F of the loss, else each step weighs alike), and the curve is
-//     run again on the
-//     fine-tuned model (to the same budget): its fallbacks, time and curve each round;
+//     run again on the fine-tuned model (to the same budget, or with --refine-stop-at F to that
+//     fraction of the FE steps, 0: to the end): its fallbacks, time and curve each round;
 //   - peak resident memory after each part.
 #include <CLI/CLI.hpp>
 #include <sys/resource.h>
@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
   bool no_fe_de = false;
   std::vector<std::string> carried;
   int return_after_steps = 0, refine_rounds = 0, refine_epochs = 100;
-  double refine_share = 0;
+  double refine_share = 0, refine_stop_at = -1;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
@@ -138,6 +138,10 @@ int main(int argc, char** argv) {
   app.add_option("--refine-epochs", refine_epochs, "epochs of each round's fine-tuning")
       ->check(CLI::Range(1, 10000))
       ->capture_default_str();
+  app.add_option("--refine-stop-at", refine_stop_at,
+                 "the refined runs stop once this fraction of their FE steps is done (0: at the "
+                 "end; default: as --fe-ann-stop-at)")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--refine-share", refine_share,
                  "the fallback paths' share of the fine-tuning's loss (0: each step alike)")
       ->check(CLI::Range(0.0, 0.99))
@@ -243,7 +247,8 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
 
     // The fe-ann curve on `ensemble`, printed under `label`; its fallen-back points' paths.
-    const auto run_fe_ann = [&](const ann::SurrogateEnsemble& ensemble, const std::string& label) {
+    const auto run_fe_ann = [&](const ann::SurrogateEnsemble& ensemble, const std::string& label,
+                                double stop_at) {
       std::filesystem::remove_all(directory);
       ensemble.Save(directory);
       tiers::SurrogateModelRecord record;
@@ -265,7 +270,7 @@ int main(int argc, char** argv) {
       ComputeContext ann_context;
       ann_context.cancelled = [&] {
         return (fe_ann_budget_s > 0 && Since(run_start) > fe_ann_budget_s) ||
-               (fe_ann_stop_at > 0 && last_progress.fraction >= fe_ann_stop_at);
+               (stop_at > 0 && last_progress.fraction >= stop_at);
       };
       const tiers::AnnProgressReport print_progress = [&](const tiers::AnnProgress& p) {
         last_progress = p;
@@ -330,7 +335,8 @@ int main(int argc, char** argv) {
       return fallback_paths;
     };
 
-    std::vector<ann::StrainHistory> gathered = run_fe_ann(trained.ensemble, "fe-ann");
+    std::vector<ann::StrainHistory> gathered =
+        run_fe_ann(trained.ensemble, "fe-ann", fe_ann_stop_at);
     std::unique_ptr<ann::SurrogateEnsemble> refined;
     for (int round = 1; round <= refine_rounds; ++round) {
       // The model before this round, fine-tuned on its training paths and every fallback path so
@@ -367,7 +373,8 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       refined = std::move(tuned);
       const std::vector<ann::StrainHistory> more =
-          run_fe_ann(*refined, "fe-ann round " + std::to_string(round));
+          run_fe_ann(*refined, "fe-ann round " + std::to_string(round),
+                     refine_stop_at >= 0 ? refine_stop_at : fe_ann_stop_at);
       gathered.insert(gathered.end(), more.begin(), more.end());
     }
     std::filesystem::remove_all(directory);

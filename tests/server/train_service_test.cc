@@ -34,9 +34,20 @@ std::string LineAfter(const std::string& out, const std::string& label, size_t f
   return out.substr(at + label.size(), end == std::string::npos ? std::string::npos : end - at - label.size());
 }
 
-// A model's block in `gonogo models` output.
+std::size_t CountOccurrences(const std::string& text, const std::string& what) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) {
+    ++count;
+  }
+  return count;
+}
+
+// A model's block in `gonogo models` output (its id on a line of its own).
 std::string ModelBlock(const std::string& listing, const std::string& id) {
-  const size_t at = listing.find(id + "\n");
+  size_t at = listing.find(id + "\n");
+  while (at != std::string::npos && at > 0 && listing[at - 1] != '\n') {
+    at = listing.find(id + "\n", at + 1);  // named inside another's block ("fine-tuned from")
+  }
   if (at == std::string::npos) return "";
   const size_t end = listing.find("made by:", at);
   return listing.substr(at + id.size(), end - at - id.size());
@@ -197,12 +208,17 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_EQ(with_rig.out.find("; rig point 3 "), std::string::npos) << "half as many held out:\n"
                                                                    << with_rig.out;
   const CliRun with_rig_listed = Gonogo(server.endpoint(), "dataset");
-  EXPECT_NE(with_rig_listed.out.find("histories: 33 (24 training, 9 held out)"), std::string::npos)
-      << with_rig_listed.out;
   const CliRun rig_export = Gonogo(server.endpoint(), "dataset export " + dataset + " --out " +
                                                           (dir.path() / "export2").string());
   ASSERT_EQ(rig_export.exit_code, 0) << rig_export.out;
   const std::string rig_index = ReadFile(dir.path() / "export2" / (dataset + ".paths.csv"));
+  // The fe-ann curve above kept its fallback paths here too (training histories of their own).
+  const std::size_t curve_fallbacks = CountOccurrences(rig_index, ",fallback,fallback ");
+  EXPECT_NE(with_rig_listed.out.find("histories: " + std::to_string(33 + curve_fallbacks) + " (" +
+                                     std::to_string(24 + curve_fallbacks) +
+                                     " training, 9 held out)"),
+            std::string::npos)
+      << curve_fallbacks << " fallback paths:\n" << with_rig_listed.out;
   EXPECT_NE(rig_index.find(",rig-point,rig 1000 N point 4,training,"), std::string::npos)
       << rig_index;
   EXPECT_NE(rig_index.find(",rig-point,rig point 2,held-out,"), std::string::npos) << rig_index;
@@ -266,6 +282,46 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(carrying_curve.exit_code, 0) << carrying_curve.out;
   EXPECT_NE(carrying_curve.out.find("surrogate model " + carrying_id), std::string::npos)
       << carrying_curve.out;
+
+  // Where the curve's points left that model's envelope, their RVEs' paths were kept in its
+  // dataset (kind "fallback", recording the coordination number as the model does), and a
+  // fine-tuning trains on them beside the recipe's paths.
+  const CliRun kept_export =
+      Gonogo(server.endpoint(), "dataset export " + dataset + "+coordination_number --out " +
+                                    (dir.path() / "export4").string());
+  ASSERT_EQ(kept_export.exit_code, 0) << kept_export.out;
+  const std::string kept_index =
+      ReadFile(dir.path() / "export4" / (dataset + "+coordination_number.paths.csv"));
+  const std::size_t fallback_paths = CountOccurrences(kept_index, ",fallback,fallback ");
+  std::cout << "  the carrying model's curve kept " << fallback_paths << " fallback paths\n";
+  ASSERT_GT(fallback_paths, 0u) << kept_index;
+  EXPECT_NE(kept_index.find("model " + carrying_id + ", 0.5 x 0.2 m wheel at 1000 N,training,"),
+            std::string::npos)
+      << kept_index;
+  const CliRun refined =
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --from " + carrying_id +
+                                    " --fallback-paths-share 0.2");
+  ASSERT_EQ(refined.exit_code, 0) << refined.out;
+  EXPECT_NE(refined.out.find(std::to_string(fallback_paths) + " of them fallback paths"),
+            std::string::npos)
+      << refined.out;
+  const std::string refined_id = RegisteredId(refined.out);
+  ASSERT_FALSE(refined_id.empty()) << refined.out;
+  const CliRun refined_models = Gonogo(server.endpoint(), "models --soil seed000_sand_rve100");
+  EXPECT_NE(LineAfter(ModelBlock(refined_models.out, refined_id), "hash "),
+            LineAfter(ModelBlock(refined_models.out, carrying_id), "hash "))
+      << "the fallback paths are in its training data:\n" << refined_models.out;
+  for (const auto& [args, code_and_message] :
+       std::vector<std::pair<std::string, std::string>>{
+           {" --fallback-paths-share 1.5", "INVALID_ARGUMENT: fallback_paths_share: must be in"},
+           {" --carry solid_fraction --fallback-paths-share 0.2",
+            "FAILED_PRECONDITION: fallback_paths_share: dataset " + dataset +
+                "+solid_fraction holds no fallback paths"}}) {
+    const CliRun refused =
+        Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16" + args);
+    EXPECT_EQ(refused.exit_code, 3) << args << ": " << refused.out;
+    EXPECT_NE(refused.out.find(code_and_message), std::string::npos) << args << ": " << refused.out;
+  }
   EXPECT_EQ(server.Terminate(), 0);
 }
 
