@@ -294,7 +294,6 @@ std::string RigPathKey(const std::string& soil_parameters, const std::string& pr
          ";rve=" + rve_version + ";" + text + RecordedSuffix(recorded);
 }
 
-// "rig 1000 N point 3": kept path k (from 0) of a rig run.
 // The dataset a training's paths go to: the soil's at the configuration, followed by "+NAME" for
 // each internal variable the paths record.
 std::string DatasetOf(const tiers::CatalogueEntry& soil, const std::string& preset,
@@ -320,6 +319,7 @@ void ValidateFallbackShare(const v1::TrainSurrogateRequest& request) {
           "fallback_paths_share", "must be in [0, 0.99] (0: the fallback paths are left out)");
 }
 
+// "rig 1000 N point 3": kept path k (from 0) of a rig run.
 std::string RigPathName(const RigRecipe& rig, int k) {
   char text[64];
   std::snprintf(text, sizeof text, "rig %g N point %d", rig.load_n, k + 1);

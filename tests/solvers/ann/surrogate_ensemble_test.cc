@@ -363,18 +363,29 @@ TEST(AnnMaterial, StatesSaveAndRestoreOnAndOffTheNetwork) {
   EXPECT_THROW(ann.RestoreState("not a state"), InputError);
 }
 
+// A compression with shear inside the envelope, along which a point stays on the network.
+Matrix3 SmallShear() {
+  Matrix3 increment = Matrix3::Zero();
+  increment(2, 2) = -1e-4;
+  increment(0, 2) = 2e-4;
+  return increment;
+}
+
+// Five small shears, a jump 40 times larger that leaves the envelope, six half shears.
+std::vector<Matrix3> OutOfTheEnvelopeAndBack() {
+  std::vector<Matrix3> increments(5, SmallShear());
+  increments.push_back(SmallShear() * 40);
+  for (int s = 0; s < 6; ++s) increments.push_back(SmallShear() * 0.5);
+  return increments;
+}
+
 // With the return on, a point that fell back goes back to the network once the ensemble would not
 // have flagged its increments `return_after_steps` times in a row: until then the soil answers
 // (its stress bit for bit the soil's along the same increments), from then the network, starting
 // from the soil's stress. With the return off the point stays on the soil. A state half-way to
 // its return saves and restores with its count; a state of the format before the count reads.
 TEST(AnnMaterial, AFallenBackPointReturnsToTheNetworkOnceBackInside) {
-  Matrix3 increment = Matrix3::Zero();
-  increment(2, 2) = -1e-4;
-  increment(0, 2) = 2e-4;
-  std::vector<Matrix3> increments(5, increment);
-  increments.push_back(increment * 40);  // leaves the envelope
-  for (int s = 0; s < 6; ++s) increments.push_back(increment * 0.5);
+  const std::vector<Matrix3> increments = OutOfTheEnvelopeAndBack();
   struct Walked {
     std::vector<std::unique_ptr<material::MaterialState>> states;  // after each increment
     std::vector<Matrix3> stresses;
@@ -449,13 +460,10 @@ TEST(AnnMaterial, AFallenBackPointReturnsToTheNetworkOnceBackInside) {
 // path; a point that returns and falls back again leaves one path (the longer); a fallen-back
 // state restored from its bytes is answered and not recorded.
 TEST(AnnMaterial, RecordsEachFallenBackPointsPathOnTheRealModel) {
-  Matrix3 increment = Matrix3::Zero();
-  increment(2, 2) = -1e-4;
-  increment(0, 2) = 2e-4;
-  std::vector<Matrix3> leaving(5, increment);
-  leaving.push_back(increment * 40);  // leaves the envelope
-  for (int s = 0; s < 6; ++s) leaving.push_back(increment * 0.5);
-  // Both points in each batch (the second takes `increment` at every step), as the FE asks; the stresses after each step, by point.
+  const Matrix3 increment = SmallShear();
+  std::vector<Matrix3> leaving = OutOfTheEnvelopeAndBack();
+  // Both points in each batch, as the FE asks (the second takes `increment` at every step); the
+  // stresses after each step, by point.
   const auto walk = [&](const material::ConstitutiveModel& model,
                         std::vector<std::unique_ptr<material::MaterialState>> states,
                         std::size_t first_step) {
