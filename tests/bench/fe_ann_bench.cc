@@ -4,8 +4,9 @@
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
 //                       [--fe-de-budget-s S] [--carry coordination_number]
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
-//                       [--progress-every-s 60] [--fe-ann-stop-at F] [--refine-rounds N [--refine-epochs 100]
-//                       [--refine-share F] [--refine-stop-at F]]
+//                       [--progress-every-s 60] [--fe-ann-stop-at F]
+//                       [--refine-rounds N [--refine-epochs 100] [--refine-share F]
+//                       [--refine-stop-at F]]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
