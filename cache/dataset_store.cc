@@ -66,6 +66,14 @@ bool DatasetStore::Has(const std::string& key) {
   return s.Step();
 }
 
+bool DatasetStore::HasKind(const std::string& dataset, const std::string& path_kind) {
+  std::lock_guard<std::recursive_mutex> lock(db_.mutex());
+  Statement s = db_.Prepare(
+      "SELECT 1 FROM rve_histories WHERE dataset = ?1 AND path_kind = ?2 LIMIT 1");
+  s.Bind(1, dataset).Bind(2, path_kind);
+  return s.Step();
+}
+
 std::optional<StoredHistory> DatasetStore::Find(const std::string& key) {
   std::lock_guard<std::recursive_mutex> lock(db_.mutex());
   Statement s = db_.Prepare(std::string("SELECT ") + kColumns +
@@ -106,12 +114,13 @@ std::vector<DatasetSummary> DatasetStore::List(const std::string& soil_name) {
 }
 
 std::vector<StoredHistory> DatasetStore::Histories(const std::string& dataset,
-                                                   const std::string& role) {
+                                                   const std::string& role,
+                                                   const std::string& path_kind) {
   std::lock_guard<std::recursive_mutex> lock(db_.mutex());
   Statement s = db_.Prepare(std::string("SELECT ") + kColumns +
                             " FROM rve_histories WHERE dataset = ?1 AND (?2 = '' OR role = ?2) "
-                            "ORDER BY id");
-  s.Bind(1, dataset).Bind(2, role);
+                            "AND (?3 = '' OR path_kind = ?3) ORDER BY id");
+  s.Bind(1, dataset).Bind(2, role).Bind(3, path_kind);
   std::vector<StoredHistory> out;
   while (s.Step()) out.push_back(ReadRow(s));
   return out;

@@ -73,8 +73,12 @@ class DatasetStore {
   std::optional<StoredHistory> Find(const std::string& history_key);
   // Datasets, newest first; `soil_name` non-empty: that soil's.
   std::vector<DatasetSummary> List(const std::string& soil_name = "");
-  // A dataset's histories in the order they were stored; `role` non-empty: that role's.
-  std::vector<StoredHistory> Histories(const std::string& dataset, const std::string& role = "");
+  // A dataset's histories in the order they were stored; `role` non-empty: that role's;
+  // `path_kind` non-empty: that kind's.
+  std::vector<StoredHistory> Histories(const std::string& dataset, const std::string& role = "",
+                                       const std::string& path_kind = "");
+  // Whether the dataset holds a history of `path_kind` (without reading any).
+  bool HasKind(const std::string& dataset, const std::string& path_kind);
 
  private:
   Database& db_;

@@ -303,15 +303,6 @@ std::string DatasetOf(const tiers::CatalogueEntry& soil, const std::string& pres
   return dataset;
 }
 
-// The dataset's fallback paths (server/fallback_paths.h), in the order they were kept.
-std::vector<cache::StoredHistory> FallbackPathsOf(cache::Database& db, const std::string& dataset) {
-  std::vector<cache::StoredHistory> paths;
-  for (cache::StoredHistory& row : cache::DatasetStore(db).Histories(dataset, cache::kTrainingRole)) {
-    if (row.path_kind == kFallbackPathKind) paths.push_back(std::move(row));
-  }
-  return paths;
-}
-
 // What a training request's fallback_paths_share may be.
 void ValidateFallbackShare(const v1::TrainSurrogateRequest& request) {
   Require(std::isfinite(request.fallback_paths_share()) && request.fallback_paths_share() >= 0 &&
@@ -352,7 +343,7 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
   }
   if (request.fallback_paths_share() > 0) {
     const std::string dataset = DatasetOf(soil, config_.fe_de_preset, recorded);
-    if (FallbackPathsOf(db_, dataset).empty()) {
+    if (!cache::DatasetStore(db_).HasKind(dataset, kFallbackPathKind)) {
       throw PreconditionError("fallback_paths_share",
                               "dataset " + dataset + " holds no fallback paths: they are kept "
                               "from fe-ann curves whose points fell back (gonogo curve --tier "
@@ -569,7 +560,9 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     const double fallback_share = request.fallback_paths_share();
     int fallback_paths = 0;
     if (fallback_share > 0) {
-      const std::vector<cache::StoredHistory> rows = FallbackPathsOf(db_, dataset);
+      // The dataset's fallback paths (server/fallback_paths.h), in the order they were kept.
+      const std::vector<cache::StoredHistory> rows =
+          store.Histories(dataset, cache::kTrainingRole, kFallbackPathKind);
       Require(!rows.empty(), "fallback_paths_share", "dataset " + dataset + " holds no fallback paths");
       double recipe_steps = 0, fallback_steps = 0;
       for (const ann::StrainHistory& history : training) recipe_steps += history.steps();
