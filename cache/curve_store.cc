@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <sstream>
 
 #include "cache/curve_key.h"
 #include "solvers/mobility/similarity.h"
@@ -44,10 +45,60 @@ std::optional<SoilParameters> ParseStoredParameters(const std::string& text) {
   }
 }
 
+// A surrogate run as one line of "name=value" words, the fallback steps comma-separated:
+// "fe_steps=900 fallbacks=2 at=449,637 returns=0 unanswered=0 kept=2 updates=114041
+// network_s=2.28 fallback_s=1.01"; "" for a curve without one.
+std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
+  if (!run) return "";
+  std::ostringstream out;
+  out.precision(17);
+  out << "fe_steps=" << run->fe_steps << " fallbacks=" << run->fallbacks << " at=";
+  for (std::size_t k = 0; k < run->fallback_point_steps.size(); ++k) {
+    out << (k ? "," : "") << run->fallback_point_steps[k];
+  }
+  out << " returns=" << run->returns << " unanswered=" << run->unanswered_flags
+      << " kept=" << run->fallback_paths_kept << " updates=" << run->network_point_updates
+      << " network_s=" << run->network_seconds << " fallback_s=" << run->fallback_seconds;
+  return out.str();
+}
+
+std::optional<SurrogateRun> ParseSurrogateRunText(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  SurrogateRun run;
+  std::istringstream words(text);
+  std::string word;
+  try {
+    while (words >> word) {
+      const std::size_t equals = word.find('=');
+      if (equals == std::string::npos) throw std::invalid_argument(word);
+      const std::string name = word.substr(0, equals), value = word.substr(equals + 1);
+      if (name == "fe_steps") run.fe_steps = std::stoll(value);
+      else if (name == "fallbacks") run.fallbacks = std::stoi(value);
+      else if (name == "returns") run.returns = std::stoll(value);
+      else if (name == "unanswered") run.unanswered_flags = std::stoll(value);
+      else if (name == "kept") run.fallback_paths_kept = std::stoi(value);
+      else if (name == "updates") run.network_point_updates = std::stoll(value);
+      else if (name == "network_s") run.network_seconds = std::stod(value);
+      else if (name == "fallback_s") run.fallback_seconds = std::stod(value);
+      else if (name == "at") {
+        std::istringstream steps(value);
+        std::string step;
+        while (std::getline(steps, step, ',')) run.fallback_point_steps.push_back(std::stoll(step));
+      }
+      // A name this code does not know is a later version's figure: left out.
+    }
+  } catch (const std::logic_error&) {  // std::invalid_argument, std::out_of_range
+    throw DatabaseError("unreadable surrogate run in the curve cache: " + text);
+  }
+  return run;
+}
+
 constexpr char kColumns[] =
     "id, cache_key, tier, tier_version, soil_name, cone_index_pa, diameter_m, width_m, "
     "section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, computed_by, "
-    "compute_seconds, computed_unix_ms, soil_parameters, inflation_pressure_pa, immobile_reason";
+    "compute_seconds, computed_unix_ms, soil_parameters, inflation_pressure_pa, immobile_reason, "
+    "surrogate_run";
+constexpr int kColumnCount = 20;  // FindSimilar reads its pi-terms after them
 
 StoredCurve ReadRow(const Statement& s) {
   StoredCurve c;
@@ -66,6 +117,7 @@ StoredCurve ReadRow(const Statement& s) {
   c.request.soil.parameters = ParseStoredParameters(s.Text(16));
   c.request.tyre.inflation_pressure_pa = s.Double(17);
   c.curve.immobile_reason = s.Text(18);
+  c.curve.surrogate_run = ParseSurrogateRunText(s.Text(19));
   c.request.surrogate_model = SurrogateModelOfKey(c.cache_key);  // (the key is its only record)
   return c;
 }
@@ -86,8 +138,8 @@ bool CurveStore::Put(const StoredCurve& c) {
       "INSERT OR IGNORE INTO curves (cache_key, tier, tier_version, soil_name, cone_index_pa, "
       "diameter_m, width_m, section_height_m, deflection_m, rolling_radius_m, wheel_load_n, points, "
       "computed_by, compute_seconds, computed_unix_ms, soil_parameters, inflation_pressure_pa, "
-      "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa, immobile_reason) "
-      "VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+      "similarity_group, pi_b_over_d, pi_delta_over_h, pi_load_over_bd_pa, immobile_reason, "
+      "surrogate_run) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   const std::string blob = PackPoints(c.curve.points);
   s.Bind(1, c.cache_key).Bind(2, c.curve.tier).Bind(3, c.curve.tier_version);
   s.Bind(4, c.request.soil.soil_name).Bind(5, c.request.soil.cone_index_pa);
@@ -102,6 +154,7 @@ bool CurveStore::Put(const StoredCurve& c) {
   s.Bind(18, Scoped(c.scope, SimilarityGroup(c.curve.tier, c.curve.tier_version, c.request)));
   s.Bind(19, pi.width_over_diameter).Bind(20, pi.deflection_over_height);
   s.Bind(21, pi.load_over_bd_pa).Bind(22, c.curve.immobile_reason);
+  s.Bind(23, SurrogateRunText(c.curve.surrogate_run));
   s.Run();
   const bool written = db_.Changes() > 0;
   tx.Commit();
@@ -121,7 +174,8 @@ std::optional<StoredCurve> CurveStore::FindSimilar(const std::string& group,
   std::optional<StoredCurve> best;
   double best_ratio = 0;
   while (s.Step()) {
-    const mobility::PiTerms have{s.Double(19), s.Double(20), s.Double(21)};
+    const mobility::PiTerms have{s.Double(kColumnCount), s.Double(kColumnCount + 1),
+                                 s.Double(kColumnCount + 2)};
     if (!mobility::PiTermsMatch(want, have, tolerance)) continue;
     const double d = s.Double(6);
     const double ratio = std::min(d, q.tyre.diameter_m) / std::max(d, q.tyre.diameter_m);

@@ -117,6 +117,11 @@ const std::vector<std::string>& Migrations() {
       ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT 'local';
       CREATE INDEX jobs_by_owner ON jobs (owner, created_unix_ms);
       )sql",
+      // 7 -> 8: how a surrogate tier's curve answered its points (its fallbacks and when), as
+      // curve_store.cc's text; curves stored before have none.
+      R"sql(
+      ALTER TABLE curves ADD COLUMN surrogate_run TEXT NOT NULL DEFAULT '';
+      )sql",
   };
   return kMigrations;
 }

@@ -1,4 +1,5 @@
 // gonogo curve | scalability: one wheel on one soil, through the server's traction tiers.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -77,6 +78,42 @@ void PrintCurveCsv(const v1::TractionCurve& curve) {
   }
 }
 
+// How an fe-ann curve answered its points: "surrogate run: 3 of its points fell back to their
+// RVEs, at steps 449, 450 and 637 of 900 (3 paths kept for training); network 2.28 s for 114041
+// point updates, fallbacks 1.01 s".
+void PrintSurrogateRun(const v1::SurrogateRun& run) {
+  constexpr int kStepsShown = 8;
+  std::cout << "surrogate run: ";
+  if (run.fallbacks() == 0) {
+    std::cout << "no point fell back to its RVE in " << run.fe_steps() << " FE steps";
+  } else {
+    std::cout << run.fallbacks() << (run.fallbacks() == 1 ? " point" : " of its points")
+              << " fell back to " << (run.fallbacks() == 1 ? "its RVE" : "their RVEs")
+              << ", at step";
+    const int steps = run.fallback_point_steps_size();
+    std::cout << (steps == 1 ? " " : "s ");
+    for (int k = 0; k < std::min(steps, kStepsShown); ++k) {
+      std::cout << (k == 0 ? "" : k + 1 == steps ? " and " : ", ") << run.fallback_point_steps(k);
+    }
+    if (steps > kStepsShown) std::cout << " and " << steps - kStepsShown << " more";
+    std::cout << " of " << run.fe_steps();
+    if (run.returns() > 0) std::cout << ", " << run.returns() << " sent back to the network";
+    if (run.fallback_paths_kept() > 0) {
+      std::cout << " (" << run.fallback_paths_kept() << " paths kept for training)";
+    }
+  }
+  if (run.unanswered_flags() > 0) {
+    std::cout << "; " << run.unanswered_flags() << " flagged updates answered by the network "
+              << "(fallback off)";
+  }
+  std::cout << "; network " << FormatNumber(run.network_seconds()) << " s for "
+            << run.network_point_updates() << " point updates";
+  if (run.fallbacks() > 0) {
+    std::cout << ", fallbacks " << FormatNumber(run.fallback_seconds()) << " s";
+  }
+  std::cout << "\n";
+}
+
 // Where the curve came from: tier, load, soil, cache or computation, similarity.
 void PrintCurveHeading(const v1::TractionCurve& curve) {
   const auto& p = curve.provenance();
@@ -91,6 +128,7 @@ void PrintCurveHeading(const v1::TractionCurve& curve) {
   }
   if (!p.surrogate_model().empty()) std::cout << "surrogate model " << p.surrogate_model() << ", ";
   std::cout << (p.cache_hit() ? "from the cache" : "computed") << " by " << p.computed_by() << "\n";
+  if (p.has_surrogate_run()) PrintSurrogateRun(p.surrogate_run());
   if (p.similarity_hit()) {
     const auto& r = p.reliability();
     std::cout << "similarity hit: scaled from a tyre " << 1 / p.similarity_scale_ratio()

@@ -30,7 +30,12 @@ void PrintModel(const v1::SurrogateModel& m) {
             << ", RVEs of the " << m.fe_de_preset() << " fe-de configuration\n"
             << "  network:   " << m.architecture() << ", " << m.members() << " members"
             << (m.from_model().empty() ? "" : ", fine-tuned from " + m.from_model()) << "\n"
-            << "  data:      " << m.samples() << " steps, hash " << m.data_hash() << ", trained in "
+            << "  data:      " << m.samples() << " steps"
+            << (m.fallback_paths() > 0 ? " (" + std::to_string(m.fallback_paths()) +
+                                             " fallback paths, " +
+                                             Percent(m.fallback_paths_share()) + " of the loss)"
+                                       : std::string())
+            << ", hash " << m.data_hash() << ", trained in "
             << FormatNumber(m.training_seconds()) << " s\n"
             << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
             << FormatNumber(m.spread_threshold()) << ", principal stresses capped at "

@@ -17,6 +17,8 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
   out.set_members(static_cast<uint32_t>(m.members));
   out.set_data_hash(m.data_hash);
   out.set_samples(m.samples);
+  out.set_fallback_paths(static_cast<uint32_t>(m.fallback_paths));
+  out.set_fallback_paths_share(m.fallback_paths_share);
   out.set_distance_threshold(m.distance_threshold);
   out.set_spread_threshold(m.spread_threshold);
   out.set_tensile_limit_pa(m.tensile_limit_pa);
@@ -84,6 +86,7 @@ v1::WorkerResult ToWorkerResult(const TaskResult& r) {
   for (const TractionPoint& p : r.curve.points) *w.add_points() = ToProto(p);
   w.set_training_output(r.training_output);
   for (const std::string& history : r.training_histories) w.add_training_histories(history);
+  if (r.curve.surrogate_run) *w.mutable_surrogate_run() = ToProto(*r.curve.surrogate_run);
   return w;
 }
 
@@ -103,6 +106,7 @@ TaskResult FromWorkerResult(const v1::WorkerResult& w, const std::string& tier,
   r.curve.tier_version = w.tier_version();
   r.curve.immobile_reason = w.immobile_reason();
   for (const auto& p : w.points()) r.curve.points.push_back(FromProto(p));
+  if (w.has_surrogate_run()) r.curve.surrogate_run = FromProto(w.surrogate_run());
   r.computed_by = computed_by;
   r.compute_seconds = w.compute_seconds();
   r.training_output = w.training_output();

@@ -63,6 +63,9 @@ void FillCurve(const TractionRequest& request, const TractionCurve& curve,
   prov->set_compute_seconds(source.compute_seconds);
   prov->set_computed_unix_ms(source.computed_unix_ms);
   prov->set_surrogate_model(source.request.surrogate_model);
+  if (source.curve.surrogate_run) {
+    *prov->mutable_surrogate_run() = ToProto(*source.curve.surrogate_run);
+  }
 }
 
 void FillCurve(const cache::StoredCurve& s, bool hit, v1::TractionCurve* out) {

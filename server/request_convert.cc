@@ -117,6 +117,35 @@ v1::TractionPoint ToProto(const TractionPoint& p) {
   return q;
 }
 
+SurrogateRun FromProto(const v1::SurrogateRun& p) {
+  SurrogateRun run;
+  run.fe_steps = p.fe_steps();
+  run.fallbacks = static_cast<int>(p.fallbacks());
+  run.fallback_point_steps.assign(p.fallback_point_steps().begin(),
+                                  p.fallback_point_steps().end());
+  run.returns = p.returns();
+  run.unanswered_flags = p.unanswered_flags();
+  run.fallback_paths_kept = static_cast<int>(p.fallback_paths_kept());
+  run.network_point_updates = p.network_point_updates();
+  run.network_seconds = p.network_seconds();
+  run.fallback_seconds = p.fallback_seconds();
+  return run;
+}
+
+v1::SurrogateRun ToProto(const SurrogateRun& run) {
+  v1::SurrogateRun p;
+  p.set_fe_steps(run.fe_steps);
+  p.set_fallbacks(static_cast<uint32_t>(run.fallbacks));
+  for (std::int64_t step : run.fallback_point_steps) p.add_fallback_point_steps(step);
+  p.set_returns(run.returns);
+  p.set_unanswered_flags(run.unanswered_flags);
+  p.set_fallback_paths_kept(static_cast<uint32_t>(run.fallback_paths_kept));
+  p.set_network_point_updates(run.network_point_updates);
+  p.set_network_seconds(run.network_seconds);
+  p.set_fallback_seconds(run.fallback_seconds);
+  return p;
+}
+
 mobility::VehicleSpec VehicleFromProto(const v1::Vehicle& p) {
   mobility::VehicleSpec v;
   v.name = p.name();

@@ -44,6 +44,8 @@ SoilState FromProto(const v1::SoilState& soil);
 TractionRequest FromProto(const v1::GetTractionCurveRequest& request);
 v1::SoilState ToProto(const SoilState& soil);
 v1::TractionPoint ToProto(const TractionPoint& point);
+SurrogateRun FromProto(const v1::SurrogateRun& run);
+v1::SurrogateRun ToProto(const SurrogateRun& run);
 // The fields set, and only those (not validated: TractionRequest::Validate does).
 SurrogateGuard FromProto(const v1::SurrogateGuard& guard);
 v1::SurrogateGuard ToProto(const SurrogateGuard& guard);

@@ -2,6 +2,7 @@
 // TractionCurve it answers with (ARCHITECTURE section 1). Plain data, SI units in every name.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -116,12 +117,29 @@ struct TractionPoint {
   double motion_resistance_n = 0;   // N
 };
 
+// How a surrogate tier's curve (fe-ann) answered its integration points: part of the curve's
+// provenance, kept with it in the cache.
+struct SurrogateRun {
+  std::int64_t fe_steps = 0;
+  // Points answered by their RVE because the model's guard flagged them, and when: the step of
+  // each one's own history (one step per FE step) at which it fell back.
+  int fallbacks = 0;
+  std::vector<std::int64_t> fallback_point_steps;
+  std::int64_t returns = 0;           // fallen-back points sent back to the network
+  std::int64_t unanswered_flags = 0;  // flags the network answered anyway (fallback off)
+  int fallback_paths_kept = 0;        // fallen-back points' RVE paths kept as training data
+  std::int64_t network_point_updates = 0;
+  double network_seconds = 0;
+  double fallback_seconds = 0;        // the RVEs of the fallen-back points
+};
+
 struct TractionCurve {
   std::string tier;          // tier name, e.g. "empirical"
   std::string tier_version;  // changes whenever the tier's numbers could change
   std::vector<TractionPoint> points;  // empty when immobile
   // Non-empty when the soil cannot carry the wheel at all: why (the vehicle is NO-GO there).
   std::string immobile_reason;
+  std::optional<SurrogateRun> surrogate_run;  // a surrogate tier's curve only
 
   // Linear interpolation of drawbar pull (N) at slip s within the sweep.
   double DrawbarPullAt(double slip) const;

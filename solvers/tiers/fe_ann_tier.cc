@@ -241,6 +241,16 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     report.fallback_seconds = log.fallback_seconds();
     report.returns = log.returns();
   }
+  SurrogateRun& run = report.curve.surrogate_run.emplace();
+  run.fe_steps = report.fe_steps;
+  run.fallbacks = report.fallbacks;
+  run.fallback_point_steps = report.fallback_steps;
+  run.returns = report.returns;
+  run.unanswered_flags = report.unanswered_flags;
+  run.fallback_paths_kept = fallback_paths ? static_cast<int>(fallback_paths->size()) : 0;
+  run.network_point_updates = report.network_point_updates;
+  run.network_seconds = report.network_seconds;
+  run.fallback_seconds = report.fallback_seconds;
   return report;
 }
 

@@ -39,6 +39,8 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "members = " << r.members << "\n"
       << "data_hash = " << r.data_hash << "\n"
       << "samples = " << r.samples << "\n"
+      << "fallback_paths = " << r.fallback_paths << "\n"
+      << "fallback_paths_share = " << Number(r.fallback_paths_share) << "\n"
       << "distance_threshold = " << Number(r.distance_threshold) << "\n"
       << "spread_threshold = " << Number(r.spread_threshold) << "\n"
       << "tensile_limit_pa = " << Number(r.tensile_limit_pa) << "\n"
@@ -82,6 +84,10 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
     r.members = std::stoi(values.at("members"));
     r.data_hash = values.at("data_hash");
     r.samples = std::stoll(values.at("samples"));
+    if (values.count("fallback_paths") != 0) {  // absent before they were kept: none
+      r.fallback_paths = std::stoi(values.at("fallback_paths"));
+      r.fallback_paths_share = std::stod(values.at("fallback_paths_share"));
+    }
     r.distance_threshold = std::stod(values.at("distance_threshold"));
     r.spread_threshold = std::stod(values.at("spread_threshold"));
     if (values.count("tensile_limit_pa") != 0) {  // absent before the cap: none

@@ -29,6 +29,10 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   int members = 0;
   std::string data_hash;
   std::int64_t samples = 0;
+  // Of those, the fe-ann curves' fallback paths it was trained on (gonogo train
+  // --fallback-paths-share) and the share of the loss they carried; 0 for a record made before.
+  int fallback_paths = 0;
+  double fallback_paths_share = 0;
   double distance_threshold = 0;
   double spread_threshold = 0;
   // SurrogateEnsemble::Admissible's cap (Pa); infinite for a record made before it existed.

@@ -183,6 +183,11 @@ int main(int argc, char** argv) {
                 trained.generation_seconds, threads, trained.training_seconds,
                 static_cast<long long>(trained.samples), history_bytes / 1024.0,
                 100 * trained.worst_held_out_error, PeakRssMb());
+    std::printf("held-out:");
+    for (const tiers::HeldOutResult& result : trained.held_out_errors) {
+      std::printf(" %s %.1f %%;", result.path.c_str(), 100 * result.replay_error);
+    }
+    std::printf("\n");
 
     const ann::InputEnvelope& envelope = trained.ensemble.envelope();
     std::printf("model: distance threshold %.2f, spread threshold %.3g, tensile limit %g Pa, cone "
@@ -362,8 +367,14 @@ int main(int argc, char** argv) {
       auto tuned = std::make_unique<ann::SurrogateEnsemble>(ann::SurrogateEnsemble::FineTune(
           refined ? *refined : trained.ensemble, data, tuning, &reports));
       double worst_held_out = 0;
-      for (const ann::StrainHistory& history : trained.held_out) {
-        worst_held_out = std::max(worst_held_out, ann::ReplayError(*tuned, history));
+      std::string held_out_errors;
+      for (std::size_t k = 0; k < trained.held_out.size(); ++k) {
+        const double error = ann::ReplayError(*tuned, trained.held_out[k]);
+        worst_held_out = std::max(worst_held_out, error);
+        char text[160];
+        std::snprintf(text, sizeof text, " %s %.1f %%;", trained.held_out_errors[k].path.c_str(),
+                      100 * error);
+        held_out_errors += text;
       }
       std::printf("refine round %d: fine-tuned on %zu training paths and %zu fallback paths "
                   "(%lld samples), %d epochs in %.1f s; worst held-out %.1f %%; distance "
@@ -371,6 +382,7 @@ int main(int argc, char** argv) {
                   round, trained.training.size(), gathered.size(),
                   static_cast<long long>(reports.front().samples), refine_epochs,
                   Since(tune_start), 100 * worst_held_out, tuned->distance_threshold());
+      std::printf("refine round %d held-out:%s\n", round, held_out_errors.c_str());
       std::fflush(stdout);
       refined = std::move(tuned);
       const std::vector<ann::StrainHistory> more =

@@ -43,7 +43,7 @@ TEST(Migration, SchemaThreeCacheIsServedUnderTheCurrentKeysWithTheCurrentNumbers
   fs::copy_file(source, path);
 
   Database db(path.string());
-  EXPECT_EQ(db.SchemaVersion(), 7);
+  EXPECT_EQ(db.SchemaVersion(), 8);
   CurveStore store(db);
   EXPECT_EQ(store.List(CurveFilter{}, 100, 0).curves.size(), 3u) << "no curve lost";
 

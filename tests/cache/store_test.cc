@@ -51,7 +51,7 @@ class StoreTest : public ::testing::Test {
 
 TEST_F(StoreTest, NewFileIsMigratedToTheCurrentSchemaInWalMode) {
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 7);
+  EXPECT_EQ(db.SchemaVersion(), 8);
   Statement s = db.Prepare("PRAGMA journal_mode");
   ASSERT_TRUE(s.Step());
   EXPECT_EQ(s.Text(0), "wal");
@@ -84,13 +84,14 @@ TEST_F(StoreTest, AVersionOneFileIsMigratedAndKeepsItsCurves) {
   sqlite3_close(raw);
 
   Database db(path_);
-  EXPECT_EQ(db.SchemaVersion(), 7);
+  EXPECT_EQ(db.SchemaVersion(), 8);
   CurveStore store(db);
   auto old = store.Find("old-key");
   ASSERT_TRUE(old.has_value());
   EXPECT_EQ(old->computed_unix_ms, 77);
   EXPECT_FALSE(old->request.soil.parameters.has_value());
   EXPECT_EQ(old->request.tyre.inflation_pressure_pa, 0.0);
+  EXPECT_FALSE(old->curve.surrogate_run.has_value());
   // Jobs from before identities belong to the one identity there was.
   const auto job = JobStore(db).Get("job-old");
   ASSERT_TRUE(job.has_value());
@@ -178,6 +179,59 @@ TEST_F(StoreTest, CurvesSurviveReopeningAndRoundTripExactly) {
   EXPECT_DOUBLE_EQ(found->request.tyre.rolling_radius_m, 0.4728);
   EXPECT_EQ(found->request.slips, c.request.slips);
   EXPECT_FALSE(store.Find("no such key").has_value());
+}
+
+// An fe-ann curve's provenance (how many points fell back, and when) is kept with it; every other
+// tier's curve has none.
+TEST_F(StoreTest, ASurrogateCurvesRunRoundTripsExactly) {
+  StoredCurve c = Curve(149000, 42);
+  SurrogateRun& run = c.curve.surrogate_run.emplace();
+  run.fe_steps = 900;
+  run.fallbacks = 3;
+  run.fallback_point_steps = {449, 450, 637};
+  run.returns = 1;
+  run.unanswered_flags = 7;
+  run.fallback_paths_kept = 3;
+  run.network_point_updates = 114041;
+  run.network_seconds = 2.2812345678901234;
+  run.fallback_seconds = 1.0e-3 / 3;
+  Database db(path_);
+  CurveStore store(db);
+  ASSERT_TRUE(store.Put(c));
+  ASSERT_TRUE(store.Put(Curve(160000, 43)));
+  const std::optional<StoredCurve> found = store.Find(c.cache_key);
+  ASSERT_TRUE(found.has_value());
+  ASSERT_TRUE(found->curve.surrogate_run.has_value());
+  const SurrogateRun& back = *found->curve.surrogate_run;
+  EXPECT_EQ(back.fe_steps, 900);
+  EXPECT_EQ(back.fallbacks, 3);
+  EXPECT_EQ(back.fallback_point_steps, (std::vector<std::int64_t>{449, 450, 637}));
+  EXPECT_EQ(back.returns, 1);
+  EXPECT_EQ(back.unanswered_flags, 7);
+  EXPECT_EQ(back.fallback_paths_kept, 3);
+  EXPECT_EQ(back.network_point_updates, 114041);
+  EXPECT_EQ(back.network_seconds, run.network_seconds);
+  EXPECT_EQ(back.fallback_seconds, run.fallback_seconds);
+  EXPECT_FALSE(store.Find(Curve(160000, 43).cache_key)->curve.surrogate_run.has_value());
+
+  // No fallback at all is a run too, not an absent one.
+  StoredCurve none = Curve(170000, 44);
+  none.curve.surrogate_run.emplace().fe_steps = 900;
+  ASSERT_TRUE(store.Put(none));
+  const std::optional<StoredCurve> none_back = store.Find(none.cache_key);
+  ASSERT_TRUE(none_back->curve.surrogate_run.has_value());
+  EXPECT_EQ(none_back->curve.surrogate_run->fallbacks, 0);
+  EXPECT_TRUE(none_back->curve.surrogate_run->fallback_point_steps.empty());
+
+  // A damaged line is refused by name, not read as no fallback.
+  db.Exec("UPDATE curves SET surrogate_run = 'fe_steps=900 fallbacks=x' WHERE cache_key = '" +
+          c.cache_key + "'");
+  try {
+    store.Find(c.cache_key);
+    ADD_FAILURE() << "a damaged surrogate run was read";
+  } catch (const DatabaseError& e) {
+    EXPECT_NE(std::string(e.what()).find("surrogate run"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(StoreTest, ListFiltersAndPagesNewestFirst) {

@@ -98,6 +98,31 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
       << own_guard.out;
   EXPECT_NE(own_guard.out.find("surrogate model " + id + ", computed by rank 1"), std::string::npos)
       << "not the default guard's cached curve: " << own_guard.out;
+
+  // The curve's provenance says how its points were answered, computed and from the cache alike:
+  // with the fallback off none fell back; with it on (the cached curve above) the line names the
+  // fallbacks and when, or says there were none.
+  const std::regex run_line("surrogate run: [^\n]*");
+  std::smatch computed_run, cached_run;
+  ASSERT_TRUE(std::regex_search(own_guard.out, computed_run, run_line)) << own_guard.out;
+  EXPECT_NE(computed_run.str().find("surrogate run: no point fell back to its RVE in "),
+            std::string::npos)
+      << computed_run.str();
+  const CliRun own_guard_again = Gonogo(server.endpoint(), std::string(kWheel) + kOwnGuard);
+  ASSERT_TRUE(std::regex_search(own_guard_again.out, cached_run, run_line)) << own_guard_again.out;
+  EXPECT_NE(own_guard_again.out.find("from the cache"), std::string::npos) << own_guard_again.out;
+  EXPECT_EQ(cached_run.str(), computed_run.str());
+  std::smatch guarded_run;
+  ASSERT_TRUE(std::regex_search(again.out, guarded_run, run_line)) << again.out;
+  std::cout << "  " << guarded_run.str() << "\n  with the fallback off: " << computed_run.str()
+            << "\n";
+  EXPECT_TRUE(std::regex_match(
+      guarded_run.str(),
+      std::regex("surrogate run: (no point fell back to its RVE in [0-9]+ FE steps|[0-9]+ (point|of "
+                 "its points) fell back to (its RVE|their RVEs), at steps? [0-9, and]+( and [0-9]+ "
+                 "more)? of [0-9]+ \\([0-9]+ paths kept for training\\)); network [0-9.e+-]+ s "
+                 "for [0-9]+ point updates(, fallbacks [0-9.e+-]+ s)?")))
+      << guarded_run.str();
   for (const auto& [flags, field] :
        {std::pair{" --distance-threshold -1", "surrogate_guard.distance_threshold"},
         std::pair{" --fallback off --return-after-steps 5", "surrogate_guard.return_after_steps"}}) {

@@ -311,6 +311,14 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_NE(LineAfter(ModelBlock(refined_models.out, refined_id), "hash "),
             LineAfter(ModelBlock(refined_models.out, carrying_id), "hash "))
       << "the fallback paths are in its training data:\n" << refined_models.out;
+  EXPECT_NE(ModelBlock(refined_models.out, refined_id)
+                .find("(" + std::to_string(fallback_paths) + " fallback paths, 20.0 % of the loss)"),
+            std::string::npos)
+      << "the model's record names its fallback paths:\n" << refined_models.out;
+  std::cout << "  the fine-tuned model's data:"
+            << LineAfter(ModelBlock(refined_models.out, refined_id), "data:") << "\n";
+  EXPECT_EQ(ModelBlock(refined_models.out, carrying_id).find("fallback paths"), std::string::npos)
+      << refined_models.out;
   for (const auto& [args, code_and_message] :
        std::vector<std::pair<std::string, std::string>>{
            {" --fallback-paths-share 1.5", "INVALID_ARGUMENT: fallback_paths_share: must be in"},

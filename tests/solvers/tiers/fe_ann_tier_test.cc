@@ -337,6 +337,10 @@ TEST_F(FeAnnTierTest, ARequestsGuardIsTheOneItsPointsAreFlaggedBy) {
   EXPECT_EQ(report.fallbacks, 0);
   EXPECT_GE(report.unanswered_flags, report.network_point_updates - 4)
       << "every point's every update flagged";
+  ASSERT_TRUE(report.curve.surrogate_run.has_value());
+  EXPECT_EQ(report.curve.surrogate_run->unanswered_flags, report.unanswered_flags);
+  EXPECT_EQ(report.curve.surrogate_run->fallbacks, 0);
+  EXPECT_EQ(report.curve.surrogate_run->fallback_paths_kept, 0) << "none asked for";
   EXPECT_EQ(report.curve.tier_version, "fe-ann-3-tiny-nofallback-d1e-12-s1e-12");
 }
 
@@ -453,6 +457,16 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
     EXPECT_GT(static_cast<std::int64_t>(path.steps()), first_fallback);
     EXPECT_LE(path.steps(), static_cast<std::size_t>(report.fe_steps) + 2);
   }
+  // The curve carries the run's provenance (the service caches and shows it).
+  ASSERT_TRUE(report.curve.surrogate_run.has_value());
+  const SurrogateRun& run = *report.curve.surrogate_run;
+  EXPECT_EQ(run.fe_steps, report.fe_steps);
+  EXPECT_EQ(run.fallbacks, report.fallbacks);
+  EXPECT_EQ(run.fallback_point_steps, report.fallback_steps);
+  EXPECT_EQ(run.fallback_paths_kept, static_cast<int>(fallback_paths.size()));
+  EXPECT_EQ(run.network_point_updates, report.network_point_updates);
+  EXPECT_EQ(run.network_seconds, report.network_seconds);
+  EXPECT_EQ(run.fallback_seconds, report.fallback_seconds);
   EXPECT_LT(worst_pull, 0.05);
   EXPECT_LT(worst_torque, 0.05);
   EXPECT_LT(worst_sinkage, 0.05);

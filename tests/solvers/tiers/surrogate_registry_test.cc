@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -66,7 +67,10 @@ class SurrogateRegistryTest : public ::testing::Test {
 TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   const SurrogateRegistry registry(root_.string());
   EXPECT_TRUE(registry.List().empty());  // no directory yet: no models, no error
-  const RegisteredSurrogate a = registry.Register(Record("sand-a", "sand", 0.05, 1000), Ensemble());
+  RegisteredSurrogate fine_tuned = Record("sand-a", "sand", 0.05, 1000);
+  fine_tuned.fallback_paths = 7;
+  fine_tuned.fallback_paths_share = 0.2;
+  const RegisteredSurrogate a = registry.Register(fine_tuned, Ensemble());
   registry.Register(Record("sand-b", "sand", 0.03, 2000), Ensemble());
   registry.Register(Record("sand-c", "sand", 0.03, 1500), Ensemble());
   registry.Register(Record("clay-a", "clay", 0.01, 3000), Ensemble());
@@ -77,6 +81,9 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(described->soil_parameters, "model=dem-hertz-mindlin;soil=sand");
   EXPECT_EQ(described->architecture, "mlp-8-tanh-anchored");
   EXPECT_EQ(described->samples, 60);
+  EXPECT_EQ(described->fallback_paths, 7);
+  EXPECT_EQ(described->fallback_paths_share, 0.2);
+  EXPECT_EQ(registry.Describe("sand-b")->fallback_paths, 0);
   EXPECT_EQ(described->distance_threshold, 12.5);
   EXPECT_EQ(described->tensile_limit_pa, 12.0);
   EXPECT_EQ(described->least_principal_ratio, 0.25);
@@ -119,6 +126,37 @@ TEST_F(SurrogateRegistryTest, RefusesMalformedAndTakenIds) {
     }
   }
   EXPECT_EQ(registry.List().size(), 1u);
+}
+
+// A record written before a field existed reads as that field's "none": no fallback paths, no
+// cap, no cone.
+TEST_F(SurrogateRegistryTest, ReadsARecordMadeBeforeItsLaterFields) {
+  const SurrogateRegistry registry(root_.string());
+  RegisteredSurrogate record = Record("old", "sand", 0.05, 1000);
+  record.fallback_paths = 3;
+  record.fallback_paths_share = 0.1;
+  registry.Register(record, Ensemble());
+  const fs::path file = root_ / "old" / "model.txt";
+  std::ifstream in(file);
+  std::string kept, line;
+  int dropped = 0;
+  while (std::getline(in, line)) {
+    const bool later = line.rfind("fallback_paths", 0) == 0 ||
+                       line.rfind("tensile_limit_pa", 0) == 0 ||
+                       line.rfind("least_principal_ratio", 0) == 0;
+    dropped += later;
+    if (!later) kept += line + "\n";
+  }
+  in.close();
+  ASSERT_EQ(dropped, 4) << "the record's later fields were not where this test looks";
+  std::ofstream(file) << kept;
+  const std::optional<RegisteredSurrogate> old = registry.Describe("old");
+  ASSERT_TRUE(old.has_value());
+  EXPECT_EQ(old->fallback_paths, 0);
+  EXPECT_EQ(old->fallback_paths_share, 0);
+  EXPECT_TRUE(std::isinf(old->tensile_limit_pa));
+  EXPECT_EQ(old->least_principal_ratio, 0);
+  EXPECT_EQ(old->samples, 60);
 }
 
 TEST_F(SurrogateRegistryTest, WhatACrashLeavesIsNeitherListedNorKept) {
