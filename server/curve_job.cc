@@ -70,10 +70,10 @@ void JobManager::RunCurveJob(const cache::JobRecord& rec, const std::shared_ptr<
     options.after_lookups = [&](const std::vector<Resolution>& found) {
       if (!found.front().ok()) report(0.0, "computing the traction curve on the pool", true);
     };
-    options.on_task_progress = [&](size_t, double fraction) {
+    options.on_task_progress = [&](size_t, double fraction, const std::string& note) {
       report(std::clamp(fraction, 0.0, 1.0),
              "computing the traction curve: " + std::to_string(static_cast<int>(100 * fraction)) +
-                 " %",
+                 " %" + (note.empty() ? std::string() : "; " + note),
              false);
     };
     const Resolution answer = resolver_.Resolve(tier, {task}, options).front();

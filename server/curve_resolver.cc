@@ -107,7 +107,9 @@ std::vector<Resolution> CurveResolver::Resolve(const TractionTier& tier,
         if (error) spec.checkpoint_dir.clear();  // computed without checkpoints then
       }
       if (options.on_task_progress) {
-        spec.progress = [report = options.on_task_progress, i](double f) { report(i, f); };
+        spec.progress = [report = options.on_task_progress, i](double f, const std::string& note) {
+          report(i, f, note);
+        };
       }
       outstanding[spec.task_id] = i;
       pool_.Submit(std::move(spec), [inbox](TaskResult r) {

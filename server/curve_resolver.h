@@ -69,8 +69,9 @@ struct ResolveOptions {
   std::function<void(const std::vector<Resolution>&)> after_lookups;
   // Each computed, failed or cancelled task as it ends (on the resolving thread).
   std::function<void(size_t index, const Resolution&)> on_task_end;
-  // A running task's progress (fraction of its curve), from a pool thread.
-  std::function<void(size_t index, double fraction)> on_task_progress;
+  // A running task's progress (fraction of its curve, and the tier's note on its run or ""), from
+  // a pool thread.
+  std::function<void(size_t index, double fraction, const std::string& note)> on_task_progress;
 };
 
 // Tasks a Resolve call keeps in the pool per worker: enough to keep every worker busy, few enough

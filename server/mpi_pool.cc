@@ -187,7 +187,7 @@ void MpiPool::CommLoop() {
       did_work = true;
       auto it = running.find(progress.task_id());
       if (it != running.end() && it->second->entry.task.progress) {
-        it->second->entry.task.progress(progress.fraction());
+        it->second->entry.task.progress(progress.fraction(), progress.note());
       }
     }
     // Results: a task ends when every member has reported; the leader's result is its answer.
@@ -294,7 +294,9 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
   }
   // Outlives the progress callback, which captures it (at most two reports a second).
   auto last_report = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  std::string latest_note;  // the tier's, sent with its next fraction
   if (leader) {
+    context.progress_note = [&](const std::string& note) { latest_note = note; };
     context.progress = [&](double fraction) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last_report < std::chrono::milliseconds(500)) return;
@@ -302,6 +304,7 @@ TaskResult RunWorkerTask(const TierRegistry& tiers, const v1::WorkerTask& wire, 
       v1::WorkerProgress p;
       p.set_task_id(task.task_id);
       p.set_fraction(fraction);
+      p.set_note(latest_note);
       Send(p.SerializeAsString(), 0, kTagProgress);
     };
   }

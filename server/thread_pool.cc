@@ -1,6 +1,8 @@
 #include "server/thread_pool.h"
 
 #include <algorithm>
+#include <memory>
+#include <string>
 
 #include "server/task_runner.h"
 
@@ -58,7 +60,14 @@ void ThreadPool::Loop() {
     // A task that asks for several ranks runs alone here (no communicator): every tier must.
     ComputeContext context;
     context.cancelled = [flag] { return flag->load(); };
-    context.progress = entry.task.progress;
+    if (entry.task.progress) {
+      // The tier's note goes with its next fraction (both on this thread).
+      auto note = std::make_shared<std::string>();
+      context.progress_note = [note](const std::string& text) { *note = text; };
+      context.progress = [note, report = entry.task.progress](double fraction) {
+        report(fraction, *note);
+      };
+    }
     context.threads = std::max(1, entry.task.needs.threads);
     context.checkpoint_dir = entry.task.checkpoint_dir;
     TaskResult r = RunTask(tiers_, entry.task, context, "thread");

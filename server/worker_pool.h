@@ -15,8 +15,9 @@
 
 namespace gonogo::server {
 
-// A running task's progress: the fraction of its curve done, in [0, 1].
-using TaskProgress = std::function<void(double fraction)>;
+// A running task's progress: the fraction of its curve done, in [0, 1], and the tier's latest note
+// on its run ("" if none; ComputeContext::progress_note).
+using TaskProgress = std::function<void(double fraction, const std::string& note)>;
 
 // Tasks expected to take at least this long go to the long lane of a pool's queue, so that cheap
 // and long tasks never wait in one FIFO behind each other.

@@ -46,6 +46,10 @@ struct ComputeContext {
   // solvers/ann/strain_history.h), called once at the end of the computation, also when it stops
   // early; empty: nothing is kept (and nothing recorded for it).
   std::function<void(std::vector<std::string> histories)> keep_training_histories;
+  // A tier's word on how its run goes, beside the fraction (the fe-ann tier: its points fallen
+  // back to their RVEs so far), called before the progress report it goes with; may be empty. In a
+  // collective task only the group's rank 0 reports.
+  std::function<void(const std::string& note)> progress_note;
 
   bool Cancelled() const { return cancelled && cancelled(); }
   void Report(double fraction) const {

@@ -45,6 +45,24 @@ std::string VersionOf(const FeAnnOptions& options) {
   return version;
 }
 
+// A running curve's fallbacks in words, for its job's progress: "12 points fallen back to their
+// RVEs (RVEs 143 s, network 54 s)". The fallbacks are what makes an fe-ann curve long.
+std::string ProgressNote(const AnnProgress& progress) {
+  char seconds[96];
+  std::snprintf(seconds, sizeof seconds, "RVEs %.0f s, network %.0f s", progress.fallback_seconds,
+                progress.network_seconds);
+  std::string note;
+  if (progress.fallbacks == 0) {
+    note = "no point fallen back to its RVE";
+  } else if (progress.fallbacks == 1) {
+    note = "1 point fallen back to its RVE";
+  } else {
+    note = std::to_string(progress.fallbacks) + " points fallen back to their RVEs";
+  }
+  if (progress.returns > 0) note += ", " + std::to_string(progress.returns) + " sent back";
+  return note + " (" + seconds + ")";
+}
+
 }  // namespace
 
 void FeAnnOptions::Validate(const std::string& p) const {
@@ -200,9 +218,9 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
       };
   ComputeContext alone = context;
   alone.communicator = MPI_COMM_NULL;
-  if (on_progress) {
-    alone.progress = [&material, &on_progress, outer = context.progress](double fraction) {
-      if (outer) outer(fraction);
+  if (on_progress || context.progress_note) {
+    alone.progress = [&material, &on_progress, outer = context.progress,
+                      note = context.progress_note](double fraction) {
       AnnProgress progress;
       progress.fraction = fraction;
       if (material) {
@@ -212,7 +230,9 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
         progress.network_seconds = log.network_seconds();
         progress.fallback_seconds = log.fallback_seconds();
       }
-      on_progress(progress);
+      if (note) note(ProgressNote(progress));
+      if (outer) outer(fraction);
+      if (on_progress) on_progress(progress);
     };
   }
   AnnRunReport report;

@@ -123,6 +123,19 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
                  "more)? of [0-9]+ \\([0-9]+ paths kept for training\\)); network [0-9.e+-]+ s "
                  "for [0-9]+ point updates(, fallbacks [0-9.e+-]+ s)?")))
       << guarded_run.str();
+
+  // A curve job's progress tells how its run goes: its points fallen back so far (the fallbacks
+  // are what makes an fe-ann curve long). A guard of its own, so that it is computed.
+  const CliRun as_job =
+      Gonogo(server.endpoint(), std::string(kWheel) + " --job --return-after-steps 5");
+  ASSERT_EQ(as_job.exit_code, 0) << as_job.out;
+  std::smatch progress_note;
+  EXPECT_TRUE(std::regex_search(
+      as_job.out, progress_note,
+      std::regex("computing the traction curve: [0-9]+ %; (no point fallen back to its RVE|1 "
+                 "point fallen back to its RVE|[0-9]+ points fallen back to their RVEs)[^\n]*")))
+      << as_job.out;
+  std::cout << "  a job's progress: " << progress_note.str() << "\n";
   for (const auto& [flags, field] :
        {std::pair{" --distance-threshold -1", "surrogate_guard.distance_threshold"},
         std::pair{" --fallback off --return-after-steps 5", "surrogate_guard.return_after_steps"}}) {

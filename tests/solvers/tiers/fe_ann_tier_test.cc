@@ -405,8 +405,17 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   const auto start = std::chrono::steady_clock::now();
   std::vector<AnnProgress> progress;
   std::vector<ann::StrainHistory> fallback_paths;
+  // The notes a job's progress shows, each before the fraction it goes with.
+  std::vector<std::string> notes;
+  std::vector<double> fractions;
+  ComputeContext context;
+  context.progress_note = [&](const std::string& note) { notes.push_back(note); };
+  context.progress = [&](double fraction) {
+    fractions.push_back(fraction);
+    EXPECT_EQ(notes.size(), fractions.size()) << "a note before each fraction";
+  };
   const AnnRunReport report = tier.Run(
-      Request(), {}, [&](const AnnProgress& p) { progress.push_back(p); }, &fallback_paths);
+      Request(), context, [&](const AnnProgress& p) { progress.push_back(p); }, &fallback_paths);
   const double seconds = Seconds(start);
   ASSERT_EQ(report.curve.points.size(), fe_de_->curve.points.size())
       << report.curve.immobile_reason;
@@ -448,6 +457,16 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   EXPECT_GT(progress.back().fallbacks, 0) << "the fallbacks happen during the run";
   EXPECT_LE(progress.back().fallbacks, report.fallbacks);
   EXPECT_LE(progress.back().network_seconds, report.network_seconds);
+  ASSERT_EQ(notes.size(), progress.size());
+  EXPECT_EQ(notes.front().rfind("no point fallen back to its RVE (RVEs ", 0), 0u)
+      << notes.front();
+  const std::string last_count = std::to_string(progress.back().fallbacks);
+  EXPECT_EQ(notes.back().rfind(last_count + (progress.back().fallbacks == 1 ? " point" : " points") +
+                                   " fallen back to ",
+                               0),
+            0u)
+      << notes.back();
+  std::cout << "  the last progress note: " << notes.back() << "\n";
   // Each fallen-back point's path on its RVE, from its start to the end of its bin's run.
   ASSERT_GE(fallback_paths.size(), 1u);
   EXPECT_LE(fallback_paths.size(), static_cast<std::size_t>(report.fallbacks));
