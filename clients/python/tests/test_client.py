@@ -20,14 +20,13 @@ BUILD_DIR = os.path.abspath(os.environ.get("GONOGO_BUILD_DIR", os.path.join(SOUR
 VEHICLE = os.path.join(SOURCE_DIR, "clients", "vehicles", "fed_alpha.json")
 
 
-@pytest.fixture(scope="session")
-def server(tmp_path_factory):
+def _start_server(tmp_path_factory, *extra_args):
     work = tmp_path_factory.mktemp("server")
     endpoint_file = work / "endpoint"
     proc = subprocess.Popen(
         [os.path.join(BUILD_DIR, "server", "gonogo-server"), "--data-dir", str(work / "data"),
          "--listen", "127.0.0.1:0", "--endpoint-file", str(endpoint_file), "--generate-token",
-         "--threads", "2"],
+         "--threads", "2", *extra_args],
         stdout=subprocess.DEVNULL, stderr=open(work / "server.log", "w"))
     for _ in range(200):
         if endpoint_file.exists() and endpoint_file.stat().st_size > 0:
@@ -36,7 +35,22 @@ def server(tmp_path_factory):
     else:
         proc.kill()
         pytest.fail("gonogo-server did not write its endpoint file: " + (work / "server.log").read_text())
-    yield str(endpoint_file)
+    return proc, str(endpoint_file)
+
+
+@pytest.fixture(scope="session")
+def server(tmp_path_factory):
+    proc, endpoint_file = _start_server(tmp_path_factory)
+    yield endpoint_file
+    proc.terminate()
+    proc.wait(timeout=30)
+
+
+@pytest.fixture(scope="session")
+def tiny_server(tmp_path_factory):
+    """A server whose fe-de and fe-ann tiers run the tiny configuration (seconds a curve)."""
+    proc, endpoint_file = _start_server(tmp_path_factory, "--fe-de-preset", "tiny")
+    yield endpoint_file
     proc.terminate()
     proc.wait(timeout=30)
 
@@ -145,6 +159,42 @@ def test_surrogate_models_and_a_refused_training(client):
                             wheel_load_n=1000, soil="seed000_sand_rve100")
     assert no_model.value.code == grpc.StatusCode.FAILED_PRECONDITION
     assert "gonogo train" in no_model.value.message
+
+
+def test_a_trained_model_computes_an_fe_ann_curve_and_says_how(tiny_server):
+    with gonogo.Client("@" + tiny_server) as client:
+        # The service tests' small recipe: 20-step paths, 4 walks, a 16 x 16 network, 60 epochs.
+        job = client.train(soil="seed000_sand_rve100", steps=20, walks=4, epochs=60,
+                           hidden_widths=[16, 16])
+        assert job.wait().state == gonogo.client.pb.JOB_STATE_DONE
+        model = job.model()
+        assert model.soil_name == "seed000_sand_rve100"
+        assert model.architecture == "mlp-16x16-tanh-anchored"
+        assert model.fe_de_preset == "tiny"
+        assert model.samples > 0 and len(model.held_out) > 0
+        assert model.fallback_paths == 0
+        assert [m.id for m in client.models(soil="seed000_sand_rve100")] == [model.id]
+
+        tyre = {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}
+        curve_job = client.submit_curve(tier="fe-ann", tyre=tyre, wheel_load_n=1000,
+                                        soil="seed000_sand_rve100", slip_step=0.5)
+        seen = []
+        assert curve_job.wait(progress=seen.append).state == gonogo.client.pb.JOB_STATE_DONE
+        # Its progress says how many of its points have fallen back so far (or none).
+        assert any("fallen back" in status.message for status in seen), [s.message for s in seen]
+        curve = curve_job.curve(as_dataframe=False)
+        assert curve.provenance["surrogate_model"] == model.id  # the soil's best, by default
+        assert len(curve.points) == 3
+        run = curve.provenance["surrogate_run"]
+        assert int(run["fe_steps"]) > 0  # int64 fields are strings in protobuf's JSON form
+        fallbacks = run.get("fallbacks", 0)
+        assert len(run.get("fallback_point_steps", [])) == fallbacks
+        assert run.get("fallback_paths_kept", 0) <= fallbacks
+        assert int(run["network_point_updates"]) > 0
+        again = client.curve(tier="fe-ann", tyre=tyre, wheel_load_n=1000, soil="seed000_sand_rve100",
+                             slip_step=0.5, model=model.id, as_dataframe=False)
+        assert again.provenance.get("cache_hit") is True
+        assert again.provenance["surrogate_run"] == run
 
 
 def test_scalability_rows_per_scale(client):
