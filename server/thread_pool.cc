@@ -1,7 +1,6 @@
 #include "server/thread_pool.h"
 
 #include <algorithm>
-#include <memory>
 #include <string>
 
 #include "server/task_runner.h"
@@ -60,12 +59,11 @@ void ThreadPool::Loop() {
     // A task that asks for several ranks runs alone here (no communicator): every tier must.
     ComputeContext context;
     context.cancelled = [flag] { return flag->load(); };
+    std::string latest_note;  // the tier's, sent with its next fraction (both on this thread)
     if (entry.task.progress) {
-      // The tier's note goes with its next fraction (both on this thread).
-      auto note = std::make_shared<std::string>();
-      context.progress_note = [note](const std::string& text) { *note = text; };
-      context.progress = [note, report = entry.task.progress](double fraction) {
-        report(fraction, *note);
+      context.progress_note = [&latest_note](const std::string& note) { latest_note = note; };
+      context.progress = [&latest_note, &report = entry.task.progress](double fraction) {
+        report(fraction, latest_note);
       };
     }
     context.threads = std::max(1, entry.task.needs.threads);

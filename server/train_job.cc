@@ -641,7 +641,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       record.samples += static_cast<int64_t>(history.steps());
     }
     record.fallback_paths = fallback_paths;
-    record.fallback_paths_share = fallback_paths > 0 ? fallback_share : 0;
+    record.fallback_paths_share = fallback_share;  // 0 when none asked (then fallback_paths 0)
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
