@@ -4,6 +4,10 @@
 //   gonogo-fe-de --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2
 //                --wheel-load 1000 --preset ci [--slip-step 0.25] [overrides ...]
 //   mpirun -np 3 gonogo-fe-de ... (same options on every rank)
+//   gonogo-fe-de ... --checkpoint-dir DIR [--checkpoint-every-s 600] --curve-csv FILE
+//                (a curve of hours: checkpointed, the same command resumes it; the curve kept
+//                in FILE with the configuration it was run on, for gonogo-bench-fe-ann
+//                --fe-de-curve)
 //
 //   gonogo-fe-de --calibrate --soil seed000_sand_rve100 --wheel-diameter 0.5 ... --preset ci
 //                (RVE triaxials, the Drucker-Prager fit and its twin curve beside fe-de's)
@@ -25,9 +29,11 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,6 +42,7 @@
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
 #include "solvers/tiers/fe_de_calibration.h"
+#include "solvers/tiers/fe_de_curve_file.h"
 #include "solvers/tiers/fe_de_pace.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "solvers/tiers/soil_catalogue.h"
@@ -58,6 +65,9 @@ struct CommandLine {
   int relax_steps = -1;  // -1: the preset's; 0 is a valid choice (no relaxation)
   std::string balance_csv;
   double stop_after_s = 0;  // > 0: stop the curve after this much wall time and report its pace
+  std::string checkpoint_dir;  // empty: no checkpoints
+  double checkpoint_every_s = 600;
+  std::string curve_csv;  // empty: the curve on stdout only
   bool bevameter = false;
   bool twin = false;
   bool calibrate = false;
@@ -82,7 +92,32 @@ tiers::FeDeOptions OptionsOf(const CommandLine& line) {
   if (line.slip_ramp_s > 0) options.procedure.slip_ramp_s = line.slip_ramp_s;
   if (line.self_propelled_s > 0) options.procedure.self_propelled_s = line.self_propelled_s;
   options.threads = line.threads;
+  options.checkpoint_every_s = line.checkpoint_every_s;
   return options;
+}
+
+// The options that change the preset's configuration, as "name:value" words ("none" when there
+// are none): a curve kept with --curve-csv is comparable only with a run of the same ones.
+std::string OverridesOf(const CommandLine& line) {
+  std::string words;
+  const auto add = [&](const char* name, double value, bool set) {
+    if (!set) return;
+    char text[96];
+    std::snprintf(text, sizeof text, "%s%s:%.17g", words.empty() ? "" : ",", name, value);
+    words += text;
+  };
+  add("grains_per_rve", line.grains_per_rve, line.grains_per_rve > 0);
+  add("consolidation_pressure_pa", line.consolidation_pressure_pa,
+      line.consolidation_pressure_pa > 0);
+  add("elements_per_radius", line.elements_per_radius, line.elements_per_radius > 0);
+  add("fe_time_step_s", line.fe_time_step_s, line.fe_time_step_s > 0);
+  add("inertial_number", line.inertial_number, line.inertial_number > 0);
+  add("min_de_steps", line.min_de_steps, line.min_de_steps > 0);
+  add("packing_seed", line.packing_seed, line.packing_seed > 0);
+  add("relax_steps", line.relax_steps, line.relax_steps >= 0);
+  add("slip_ramp_s", line.slip_ramp_s, line.slip_ramp_s > 0);
+  add("self_propelled_s", line.self_propelled_s, line.self_propelled_s > 0);
+  return words.empty() ? "none" : words;
 }
 
 SoilParameters SoilOf(const CommandLine& line) {
@@ -114,6 +149,7 @@ ComputeContext ContextOf(const CommandLine& line, int rank) {
   ComputeContext context;
   context.threads = line.threads;
   context.communicator = size > 1 ? MPI_COMM_WORLD : MPI_COMM_NULL;
+  context.checkpoint_dir = line.checkpoint_dir;
   if (rank == 0) {
     context.progress = [](double fraction) {
       std::fprintf(stderr, "\r  %5.1f %%", 100 * fraction);
@@ -352,14 +388,40 @@ int Run(const CommandLine& line, int rank) {
   const SoilParameters& soil = *request.soil.parameters;
   ComputeContext context = ContextOf(line, rank);
   if (line.stop_after_s > 0) return MeasurePace(line, tier, request, context, rank);
+  if (!line.checkpoint_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(line.checkpoint_dir, error);
+    if (error) throw InputError("--checkpoint-dir", "cannot be created: " + error.message());
+  }
   const tiers::FeDeRunReport report = tier.Run(request, context);
   if (rank != 0) return 0;
   std::fprintf(stderr, "\r");
-  std::printf("slip,drawbar_pull_n,torque_nm,sinkage_m,tractive_efficiency,gross_traction_n,"
-              "motion_resistance_n\n");
-  for (const TractionPoint& p : report.curve.points) {
-    std::printf("%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.slip, p.drawbar_pull_n, p.torque_nm,
-                p.sinkage_m, p.tractive_efficiency, p.gross_traction_n, p.motion_resistance_n);
+  tiers::FeDeCurveFile file;
+  file.points = report.curve.points;
+  const auto number = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return std::string(text);
+  };
+  file.configuration = {{"tier", tier.Version()},
+                        {"soil", line.soil_name},
+                        {"preset", line.preset},
+                        {"overrides", OverridesOf(line)},
+                        {"wheel_diameter_m", number(request.tyre.diameter_m)},
+                        {"wheel_width_m", number(request.tyre.width_m)},
+                        {"wheel_load_n", number(request.wheel_load_n)},
+                        {"elements", std::to_string(report.elements)},
+                        {"fe_steps", std::to_string(report.fe_steps)},
+                        {"wall_s_this_run", number(report.wall_seconds)}};
+  const std::string text = tiers::FeDeCurveFileText(file);
+  std::fputs(text.substr(text.find('\n') + 1).c_str(), stdout);  // the CSV, without the '#' line
+  if (!line.curve_csv.empty()) {
+    const std::string temporary = line.curve_csv + ".tmp";
+    std::ofstream out(temporary);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error("could not write --curve-csv " + line.curve_csv);
+    std::filesystem::rename(temporary, line.curve_csv);
   }
   if (!report.curve.immobile_reason.empty()) {
     std::fprintf(stderr, "immobile: %s\n", report.curve.immobile_reason.c_str());
@@ -371,6 +433,12 @@ int Run(const CommandLine& line, int rank) {
                soil.Get("grains_per_rve"), report.fe_steps, report.fe_time_step_s, report.ranks,
                line.threads, report.wall_seconds);
   PrintFigures(report);
+  if (!line.checkpoint_dir.empty()) {
+    std::fprintf(stderr,
+                 "the checkpoint in %s is kept (the same command answers the same curve from it "
+                 "without stepping again); delete it when done\n",
+                 line.checkpoint_dir.c_str());
+  }
   if (!line.balance_csv.empty()) {
     std::ofstream out(line.balance_csv);
     out << "step,imbalance,imbalance_after,points_moved,bytes_sent,bytes_received";
@@ -390,7 +458,8 @@ int Run(const CommandLine& line, int rank) {
 
 int main(int argc, char** argv) {
   CommandLine line;
-  CLI::App app{"gonogo-fe-de: one fe-de traction curve (FE soil with a DE RVE per point)"};
+  CLI::App app{"gonogo-fe-de: one fe-de traction curve (FE soil with a DE RVE per point)",
+               "gonogo-fe-de"};
   const CLI::Validator finite = cli_checks::FiniteNumber();
   app.add_option("--soil", line.soil_name, "dem-hertz-mindlin soil of the catalogue")
       ->capture_default_str();
@@ -494,6 +563,16 @@ int main(int argc, char** argv) {
                  "long to finish)")
       ->check(finite);
   app.add_option("--balance-csv", line.balance_csv, "write the per-step balance records here");
+  app.add_option("--checkpoint-dir", line.checkpoint_dir,
+                 "checkpoint the curve here; the same command run again resumes from it (a "
+                 "directory on a file system every rank shares)");
+  app.add_option("--checkpoint-every-s", line.checkpoint_every_s,
+                 "wall seconds between checkpoints")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  app.add_option("--curve-csv", line.curve_csv,
+                 "also write the curve here, its configuration on a first '#' line "
+                 "(gonogo-bench-fe-ann --fe-de-curve reads it)");
   CLI11_PARSE(app, argc, argv);
 
   int provided = 0;

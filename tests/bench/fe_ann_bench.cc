@@ -2,7 +2,7 @@
 //
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
 //                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
-//                       [--fe-de-budget-s S] [--carry coordination_number]
+//                       [--fe-de-budget-s S | --fe-de-curve FILE] [--carry coordination_number]
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
 //                       [--progress-every-s 60] [--fe-ann-stop-at F]
 //                       [--refine-rounds N [--refine-epochs 100] [--refine-share F]
@@ -22,7 +22,9 @@
 //     --fe-ann-budget-s, stopped after S seconds, or with --fe-ann-stop-at F once it has done the
 //     fraction F of its FE steps: the same place for every model); while fe-ann runs, a line every
 //     --progress-every-s seconds: how far, the fallbacks and returns so far, and their seconds
-//     against the network's; --no-fe-de leaves fe-de out;
+//     against the network's; --no-fe-de leaves fe-de out; --fe-de-curve FILE compares with an
+//     fe-de curve of the same rig computed before (gonogo-fe-de --curve-csv, checkpointed over
+//     as many runs as it takes; solvers/tiers/fe_de_curve_file.h) instead of running fe-de;
 //   - with --refine-rounds N, N rounds of the fallbacks' own training data: the fe-ann run records
 //     its fallen-back points' paths on their RVEs (FeAnnTier::Run's fallback_paths), the model
 //     is fine-tuned on its training paths and every fallback path gathered so far
@@ -49,6 +51,7 @@
 #include "solvers/ann/strain_history.h"
 #include "solvers/dem/rve/rve_soil.h"
 #include "solvers/tiers/fe_ann_tier.h"
+#include "solvers/tiers/fe_de_curve_file.h"
 #include "solvers/tiers/fe_de_pace.h"
 #include "solvers/tiers/soil_catalogue.h"
 #include "solvers/tiers/surrogate_training.h"
@@ -87,10 +90,12 @@ int main(int argc, char** argv) {
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
   double fe_ann_budget_s = 0, progress_every_s = 60, fe_ann_stop_at = 0;
   bool no_fe_de = false;
+  std::string fe_de_curve_path;
   std::vector<std::string> carried;
   int return_after_steps = 0, refine_rounds = 0, refine_epochs = 100;
   double refine_share = 0, refine_stop_at = -1;
-  CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory");
+  CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory",
+               "gonogo-bench-fe-ann");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
   app.add_option("--preset", preset, "fe-de configuration")->capture_default_str();
   app.add_option("--steps", steps, "steps per training path")->capture_default_str();
@@ -113,6 +118,9 @@ int main(int argc, char** argv) {
                  "> 0: run fe-de this long and project its whole time from its pace")
       ->capture_default_str();
   app.add_flag("--no-fe-de", no_fe_de, "no fe-de curve: fe-ann alone (its speedup not measured)");
+  app.add_option("--fe-de-curve", fe_de_curve_path,
+                 "compare with this fe-de curve of the same rig (gonogo-fe-de --curve-csv, run "
+                 "with --slip-step 0.25) instead of running fe-de");
   app.add_option("--fe-ann-budget-s", fe_ann_budget_s,
                  "> 0: stop the fe-ann curve after this long and print how far it came")
       ->capture_default_str();
@@ -148,8 +156,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 0.99))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  if (no_fe_de && fe_de_budget_s > 0) {
-    std::fprintf(stderr, "gonogo-bench-fe-ann: --no-fe-de and --fe-de-budget-s exclude each other\n");
+  if (int(no_fe_de) + int(fe_de_budget_s > 0) + int(!fe_de_curve_path.empty()) > 1) {
+    std::fprintf(stderr, "gonogo-bench-fe-ann: --no-fe-de, --fe-de-budget-s and --fe-de-curve "
+                         "exclude each other\n");
     return 2;
   }
   try {
@@ -169,6 +178,34 @@ int main(int argc, char** argv) {
     }
     recipe.architecture.carried_variables = carried;
     const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(preset);
+    TractionRequest request;
+    request.soil.soil_name = soil_name;
+    request.tyre.diameter_m = 0.5;
+    request.tyre.width_m = 0.2;
+    request.tyre.section_height_m = 0.1;
+    request.wheel_load_n = load_n;
+    request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
+    // An fe-de curve computed before: read and checked first, so that a wrong file fails before
+    // the training.
+    tiers::FeDeCurveFile fe_de_curve_file;
+    if (!fe_de_curve_path.empty()) {
+      fe_de_curve_file = tiers::ReadFeDeCurveFile(fe_de_curve_path, "--fe-de-curve");
+      const auto number = [](double value) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.17g", value);
+        return std::string(text);
+      };
+      tiers::RequireFeDeConfiguration(
+          fe_de_curve_file,
+          {{"tier", tiers::FeDeTier(fe_de).Version()},
+           {"soil", soil_name},
+           {"preset", preset},
+           {"overrides", "none"},
+           {"wheel_diameter_m", number(request.tyre.diameter_m)},
+           {"wheel_width_m", number(request.tyre.width_m)},
+           {"wheel_load_n", number(load_n)}},
+          request.slips, "--fe-de-curve");
+    }
     std::printf("# gonogo-bench-fe-ann: soil %s, preset %s, %s, %d epochs\n", soil_name.c_str(),
                 preset.c_str(), recipe.architecture.Describe().c_str(), epochs);
 
@@ -222,19 +259,18 @@ int main(int argc, char** argv) {
     const std::string directory = (std::filesystem::temp_directory_path() /
                                    ("gonogo_bench_fe_ann_" + std::to_string(::getpid())))
                                       .string();
-    TractionRequest request;
-    request.soil.soil_name = soil_name;
-    request.tyre.diameter_m = 0.5;
-    request.tyre.width_m = 0.2;
-    request.tyre.section_height_m = 0.1;
-    request.wheel_load_n = load_n;
-    request.slips = {0.0, 0.25, 0.5, 0.75, 1.0};
 
     auto start = std::chrono::steady_clock::now();
     tiers::FeDeRunReport de;
     double de_s = 0;
     if (no_fe_de) {
       std::printf("fe-de curve: not run (--no-fe-de)\n");
+    } else if (!fe_de_curve_path.empty()) {
+      de.curve.points = fe_de_curve_file.points;
+      std::printf("fe-de curve: from %s (%s elements, %s FE steps; its wall time over its resumed "
+                  "runs is not in the file)\n",
+                  fe_de_curve_path.c_str(), fe_de_curve_file.configuration["elements"].c_str(),
+                  fe_de_curve_file.configuration["fe_steps"].c_str());
     } else if (fe_de_budget_s > 0) {
       const tiers::FeDePace pace =
           tiers::MeasureFeDePace(tiers::FeDeTier(fe_de), request, fe_de_budget_s);
@@ -309,7 +345,9 @@ int main(int argc, char** argv) {
       const double rest_s =
           ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
       char speedup[64] = "fe-de not run";
-      if (!no_fe_de) {
+      if (!fe_de_curve_path.empty()) {
+        std::snprintf(speedup, sizeof speedup, "fe-de's time not measured here");
+      } else if (!no_fe_de) {
         std::snprintf(speedup, sizeof speedup, "%.1fx%s", de_s / ann_s,
                       fe_de_budget_s > 0 ? " of the projection" : "");
       }

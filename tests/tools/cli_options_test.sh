@@ -18,12 +18,15 @@ declare -A near_miss=(
   [gonogo-bench-map]="--sizes 100"
   [gonogo-bench-bekker]="--second 1"
   [gonogo-crosscheck-tiers]="--cone_index lll_dry_sand=500000"
+  [gonogo-fe-de]="--wheel-diameter 0.5 --wheel-width 0.2 --wheel-lod 1000"
+  [gonogo-bench-fe-ann]="--fe-de-curv fe_de.csv"
 )
 # The option each near miss above must name in its message.
 declare -A near_miss_option=(
   [gonogo-rig]="--wheel-lod" [gonogo-dem-bench]="--grain" [gonogo-rve]="--axial-strian"
   [gonogo-rve-bench]="--rve" [geo_bench]="--size" [gonogo-bench-map]="--sizes"
   [gonogo-bench-bekker]="--second" [gonogo-crosscheck-tiers]="--cone_index"
+  [gonogo-fe-de]="--wheel-lod" [gonogo-bench-fe-ann]="--fe-de-curv"
 )
 
 failures=0

@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# A long fe-de curve kept across runs: gonogo-fe-de --checkpoint-dir stopped part way and run
+# again resumes from its checkpoint and answers the curve of an uninterrupted run, byte for byte;
+# --curve-csv keeps it with its configuration, and gonogo-bench-fe-ann --fe-de-curve compares an
+# fe-ann curve with it, refusing a file of another rig or a damaged one by name before it trains.
+#
+#   fe_de_curve_file_test.sh GONOGO_FE_DE GONOGO_BENCH_FE_ANN
+#
+# On the tiny configuration (128 RVEs of 100 grains, 900 FE steps): three fe-de runs and one
+# bench run, about two minutes on 2 cores.
+set -u
+fe_de="$1"
+bench="$2"
+export OMP_WAIT_POLICY=passive
+work="$(mktemp -d)"
+trap 'kill $pid 2>/dev/null; rm -rf "$work"' EXIT
+pid=""
+failures=0
+fail() {
+  echo "FAIL: $*"
+  failures=$((failures + 1))
+}
+
+rig=(--preset tiny --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2
+     --wheel-load 1000 --slip-step 0.25 --threads 2)
+kept=(--checkpoint-dir "$work/checkpoint" --checkpoint-every-s 1 --curve-csv "$work/curve.csv")
+
+# 1. Started, stopped once a checkpoint exists and a few more seconds have passed.
+"$fe_de" "${rig[@]}" "${kept[@]}" > "$work/first.out" 2> "$work/first.err" &
+pid=$!
+for _ in $(seq 1 240); do
+  [[ -f "$work/checkpoint/rig.state" ]] && break
+  sleep 0.5
+done
+sleep 3
+kill -TERM "$pid" 2>/dev/null
+wait "$pid" 2>/dev/null
+pid=""
+[[ -f "$work/checkpoint/rig.state" ]] || fail "no checkpoint (rig.state) after 120 s"
+[[ -f "$work/curve.csv" ]] && fail "the stopped run wrote its curve file"
+
+# 2. The same command again: it resumes (its first progress is past 0 %) and keeps the curve.
+"$fe_de" "${rig[@]}" "${kept[@]}" > "$work/resumed.out" 2> "$work/resumed.err" ||
+  fail "the resumed run failed: $(tail -c 400 "$work/resumed.err")"
+first_progress="$(tr '\r' '\n' < "$work/resumed.err" | grep -m1 -oE '^ *[0-9.]+ %' | tr -d ' %')"
+if [[ -z "$first_progress" ]] || awk -v p="$first_progress" 'BEGIN { exit !(p <= 0) }'; then
+  fail "the second run did not resume: its first progress is '${first_progress}' %"
+else
+  echo "ok: resumed at ${first_progress} %"
+fi
+grep -q "the checkpoint in $work/checkpoint is kept" "$work/resumed.err" ||
+  fail "the resumed run does not say where its checkpoint is kept"
+
+# 3. An uninterrupted run answers the same curve.
+"$fe_de" "${rig[@]}" > "$work/straight.out" 2> "$work/straight.err" ||
+  fail "the uninterrupted run failed: $(tail -c 400 "$work/straight.err")"
+if cmp -s "$work/straight.out" "$work/resumed.out" && [[ -s "$work/straight.out" ]]; then
+  echo "ok: the resumed curve equals the uninterrupted one"
+else
+  fail "the resumed curve differs from the uninterrupted one:"
+  diff "$work/straight.out" "$work/resumed.out"
+fi
+
+# 4. The kept file: its configuration line, then the same CSV.
+head -1 "$work/curve.csv" > "$work/head.txt"
+for word in "tier=fe-de-1-tiny" "soil=seed000_sand_rve100" "preset=tiny" "overrides=none" \
+            "wheel_diameter_m=0.5" "wheel_load_n=1000" "elements=128" "fe_steps=900"; do
+  grep -q -- "$word" "$work/head.txt" ||
+    fail "the curve file's first line lacks $word: $(cat "$work/head.txt")"
+done
+tail -n +2 "$work/curve.csv" | cmp -s - "$work/straight.out" ||
+  fail "the curve file's CSV differs from the printed curve"
+
+# 5. The bench refuses a file of another rig, or a damaged one, naming the field, before training.
+expect_refusal() {
+  local reason="$1" expected="$2"
+  shift 2
+  local out rc
+  out="$(timeout 60 "$bench" "$@" 2>&1)"
+  rc=$?
+  if [[ $rc -ne 1 ]]; then
+    fail "$reason: exit $rc, expected 1: $out"
+  elif [[ "$out" != *"--fe-de-curve"* || "$out" != *"$expected"* ]]; then
+    fail "$reason: the message does not name --fe-de-curve and '$expected': $out"
+  elif [[ "$out" == *"training:"* ]]; then
+    fail "$reason: refused only after training"
+  else
+    echo "ok: $reason -> ${out##*gonogo-bench-fe-ann: }"
+  fi
+}
+expect_refusal "another wheel load" "wheel_load_n=1000" --fe-de-curve "$work/curve.csv" \
+  --wheel-load-n 1500
+expect_refusal "another preset" "preset=tiny" --fe-de-curve "$work/curve.csv" --preset ci
+expect_refusal "no such file" "cannot read" --fe-de-curve "$work/none.csv"
+tail -n +2 "$work/curve.csv" > "$work/no_configuration.csv"
+expect_refusal "no configuration line" "line 1" --fe-de-curve "$work/no_configuration.csv"
+sed '/^0.5000,/s/^0.5000,[^,]*/0.5000,abc/' "$work/curve.csv" > "$work/damaged.csv"
+expect_refusal "a damaged row" "line 5: 'abc'" --fe-de-curve "$work/damaged.csv"
+sed '/^0.5000,/d' "$work/curve.csv" > "$work/three_slips.csv"
+expect_refusal "other slips" "slips are" --fe-de-curve "$work/three_slips.csv"
+
+# 6. ... and compares a tiny model's fe-ann curve with a right one.
+out="$(timeout 600 "$bench" --fe-de-curve "$work/curve.csv" --walks 2 --epochs 5 --threads 2 2>&1)"
+rc=$?
+if [[ $rc -ne 0 ]]; then
+  fail "the bench with --fe-de-curve: exit $rc: $(tail -c 600 <<< "$out")"
+elif ! grep -q "^fe-de curve: from $work/curve.csv (128 elements, 900 FE steps" <<< "$out" ||
+     ! grep -qE "^fe-ann against fe-de, worst over the slips: drawbar pull [0-9.]+ % of W" \
+       <<< "$out"; then
+  fail "the bench did not compare with the file: $(tail -c 800 <<< "$out")"
+else
+  echo "ok: $(grep '^fe-ann against fe-de' <<< "$out")"
+fi
+
+if [[ $failures -gt 0 ]]; then
+  echo "$failures failure(s)"
+  exit 1
+fi
+echo "all passed"
