@@ -26,6 +26,26 @@ bool ParseNumber(const std::string& text, double& value) {
 
 }  // namespace
 
+std::string ConfigurationNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+std::map<std::string, std::string> FeDeRigConfiguration(const std::string& tier_version,
+                                                        const std::string& soil,
+                                                        const std::string& preset,
+                                                        const std::string& overrides,
+                                                        const TractionRequest& request) {
+  return {{"tier", tier_version},
+          {"soil", soil},
+          {"preset", preset},
+          {"overrides", overrides},
+          {"wheel_diameter_m", ConfigurationNumber(request.tyre.diameter_m)},
+          {"wheel_width_m", ConfigurationNumber(request.tyre.width_m)},
+          {"wheel_load_n", ConfigurationNumber(request.wheel_load_n)}};
+}
+
 std::string FeDeCurveFileText(const FeDeCurveFile& file) {
   std::string text = kConfigurationPrefix;
   bool first = true;
@@ -36,9 +56,9 @@ std::string FeDeCurveFileText(const FeDeCurveFile& file) {
   text += std::string("\n") + kHeader + "\n";
   for (const TractionPoint& p : file.points) {
     char row[256];
-    std::snprintf(row, sizeof row, "%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.slip,
-                  p.drawbar_pull_n, p.torque_nm, p.sinkage_m, p.tractive_efficiency,
-                  p.gross_traction_n, p.motion_resistance_n);
+    std::snprintf(row, sizeof row, "%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", p.slip, p.drawbar_pull_n,
+                  p.torque_nm, p.sinkage_m, p.tractive_efficiency, p.gross_traction_n,
+                  p.motion_resistance_n);
     text += row;
   }
   return text;
@@ -51,8 +71,9 @@ FeDeCurveFile ReadFeDeCurveFile(const std::string& path, const std::string& fiel
   std::string line;
   const std::string prefix = kConfigurationPrefix;
   if (!std::getline(in, line) || line.rfind(prefix, 0) != 0) {
-    throw InputError(field, "'" + path + "' line 1: not an fe-de curve file (its first line "
-                            "starts '" + prefix + "', as gonogo-fe-de --curve-csv writes it)");
+    const std::string reason = "' line 1: not an fe-de curve file (its first line starts '" +
+                               prefix + "', as gonogo-fe-de --curve-csv writes it)";
+    throw InputError(field, "'" + path + reason);
   }
   std::istringstream words(line.substr(prefix.size()));
   for (std::string word; words >> word;) {
@@ -81,8 +102,8 @@ FeDeCurveFile ReadFeDeCurveFile(const std::string& path, const std::string& fiel
       throw InputError(field, "'" + path + "' line " + std::to_string(number) +
                                   ": 7 numbers expected, found " + std::to_string(values.size()));
     }
-    file.points.push_back({values[0], values[1], values[2], values[3], values[4], values[5],
-                           values[6]});
+    file.points.push_back(
+        {values[0], values[1], values[2], values[3], values[4], values[5], values[6]});
   }
   if (file.points.empty()) throw InputError(field, "'" + path + "' holds no curve point");
   return file;
@@ -102,8 +123,9 @@ void RequireFeDeConfiguration(const FeDeCurveFile& file,
                           ? std::abs(a - b) <= 1e-9 * std::max(std::abs(a), std::abs(b))
                           : have == want;
     if (!same) {
-      throw InputError(field, "the curve was run with " + key + "=" + have + ", this comparison "
-                              "needs " + key + "=" + want);
+      const std::string asked = key + "=" + want;
+      throw InputError(
+          field, "the curve was run with " + key + "=" + have + ", this comparison needs " + asked);
     }
   }
   bool same_slips = file.points.size() == slips.size();

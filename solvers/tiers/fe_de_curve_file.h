@@ -11,8 +11,8 @@
 #pragma once
 
 #include <map>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "solvers/common/traction.h"
 
@@ -22,6 +22,19 @@ struct FeDeCurveFile {
   std::map<std::string, std::string> configuration;  // the first line's key=value words
   std::vector<TractionPoint> points;                 // in the file's order (increasing slip)
 };
+
+// The words that say which rig a curve is of: tier (its version, which names the preset), soil,
+// preset, overrides ("none", or the overridden options as name:value words joined by commas),
+// wheel_diameter_m, wheel_width_m and wheel_load_n (numbers as %.17g). The writer adds elements,
+// fe_steps and wall_s_this_run; a reader compares these.
+std::map<std::string, std::string> FeDeRigConfiguration(const std::string& tier_version,
+                                                        const std::string& soil,
+                                                        const std::string& preset,
+                                                        const std::string& overrides,
+                                                        const TractionRequest& request);
+
+// A number as the configuration words write it (%.17g).
+std::string ConfigurationNumber(double value);
 
 // The file's text (written whole; the caller renames it into place).
 std::string FeDeCurveFileText(const FeDeCurveFile& file);

@@ -398,21 +398,11 @@ int Run(const CommandLine& line, int rank) {
   std::fprintf(stderr, "\r");
   tiers::FeDeCurveFile file;
   file.points = report.curve.points;
-  const auto number = [](double value) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.17g", value);
-    return std::string(text);
-  };
-  file.configuration = {{"tier", tier.Version()},
-                        {"soil", line.soil_name},
-                        {"preset", line.preset},
-                        {"overrides", OverridesOf(line)},
-                        {"wheel_diameter_m", number(request.tyre.diameter_m)},
-                        {"wheel_width_m", number(request.tyre.width_m)},
-                        {"wheel_load_n", number(request.wheel_load_n)},
-                        {"elements", std::to_string(report.elements)},
-                        {"fe_steps", std::to_string(report.fe_steps)},
-                        {"wall_s_this_run", number(report.wall_seconds)}};
+  file.configuration = tiers::FeDeRigConfiguration(tier.Version(), line.soil_name, line.preset,
+                                                    OverridesOf(line), request);
+  file.configuration["elements"] = std::to_string(report.elements);
+  file.configuration["fe_steps"] = std::to_string(report.fe_steps);
+  file.configuration["wall_s_this_run"] = tiers::ConfigurationNumber(report.wall_seconds);
   const std::string text = tiers::FeDeCurveFileText(file);
   std::fputs(text.substr(text.find('\n') + 1).c_str(), stdout);  // the CSV, without the '#' line
   if (!line.curve_csv.empty()) {
@@ -471,13 +461,15 @@ int main(int argc, char** argv) {
   app.add_option("--wheel-diameter", line.wheel_diameter_m, "m (a curve)")->check(finite);
   app.add_option("--wheel-width", line.wheel_width_m, "m (a curve)")->check(finite);
   app.add_option("--wheel-load", line.wheel_load_n, "N (a curve)")->check(finite);
-  app.add_flag("--calibrate", line.calibrate,
-               "the calibration chain: RVE triaxials, a Drucker-Prager fit, and its continuum "
-               "twin's curve beside the fe-de curve");
-  app.add_flag("--element-tests", line.element_tests,
-               "the RVE alone: drained triaxials at --triaxial-pressures and simple shears at "
-               "--ring-pressures, their friction angles, and what a shear ring should measure "
-               "(Davis's relation)");
+  CLI::Option* calibrate =
+      app.add_flag("--calibrate", line.calibrate,
+                   "the calibration chain: RVE triaxials, a Drucker-Prager fit, and its continuum "
+                   "twin's curve beside the fe-de curve");
+  CLI::Option* element_tests =
+      app.add_flag("--element-tests", line.element_tests,
+                   "the RVE alone: drained triaxials at --triaxial-pressures and simple shears at "
+                   "--ring-pressures, their friction angles, and what a shear ring should measure "
+                   "(Davis's relation)");
   app.add_option("--shear-strain", line.shear_strain,
                  "element tests: shear strain the simple shears reach")
       ->check(finite)
@@ -493,8 +485,9 @@ int main(int argc, char** argv) {
   app.add_flag("--twin", line.twin,
                "bevameter: on the continuum twin (the Drucker-Prager fit to the RVE triaxials) "
                "instead of the RVEs");
-  app.add_flag("--bevameter", line.bevameter,
-               "run the virtual bevameter (plates and shear rings) instead of a curve");
+  CLI::Option* bevameter =
+      app.add_flag("--bevameter", line.bevameter,
+                   "run the virtual bevameter (plates and shear rings) instead of a curve");
   app.add_option("--element-size", line.element_size_m,
                  "bevameter: bin resolution, m (0: a quarter of the small plate / ring width)")
       ->check(finite);
@@ -558,21 +551,27 @@ int main(int argc, char** argv) {
   app.add_option("--threads", line.threads, "OpenMP threads per rank")
       ->check(cli_checks::AtLeastOne())
       ->capture_default_str();
-  app.add_option("--stop-after-s", line.stop_after_s,
-                 "stop the curve after this wall time and report its pace (configurations too "
-                 "long to finish)")
-      ->check(finite);
+  CLI::Option* stop_after =
+      app.add_option("--stop-after-s", line.stop_after_s,
+                     "stop the curve after this wall time and report its pace (configurations too "
+                     "long to finish)")
+          ->check(finite);
   app.add_option("--balance-csv", line.balance_csv, "write the per-step balance records here");
-  app.add_option("--checkpoint-dir", line.checkpoint_dir,
-                 "checkpoint the curve here; the same command run again resumes from it (a "
-                 "directory on a file system every rank shares)");
+  CLI::Option* checkpoint_dir =
+      app.add_option("--checkpoint-dir", line.checkpoint_dir,
+                     "checkpoint the curve here; the same command run again resumes from it (a "
+                     "directory on a file system every rank shares)");
   app.add_option("--checkpoint-every-s", line.checkpoint_every_s,
                  "wall seconds between checkpoints")
       ->check(CLI::Range(1.0, 1e6))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(checkpoint_dir);
+  // Both are a whole curve's: the other runs neither checkpoint nor end in one curve.
   app.add_option("--curve-csv", line.curve_csv,
                  "also write the curve here, its configuration on a first '#' line "
-                 "(gonogo-bench-fe-ann --fe-de-curve reads it)");
+                 "(gonogo-bench-fe-ann --fe-de-curve reads it)")
+      ->excludes(calibrate, element_tests, bevameter, stop_after);
+  checkpoint_dir->excludes(calibrate, element_tests, bevameter, stop_after);
   CLI11_PARSE(app, argc, argv);
 
   int provided = 0;

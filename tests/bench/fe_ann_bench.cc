@@ -190,20 +190,10 @@ int main(int argc, char** argv) {
     tiers::FeDeCurveFile fe_de_curve_file;
     if (!fe_de_curve_path.empty()) {
       fe_de_curve_file = tiers::ReadFeDeCurveFile(fe_de_curve_path, "--fe-de-curve");
-      const auto number = [](double value) {
-        char text[32];
-        std::snprintf(text, sizeof text, "%.17g", value);
-        return std::string(text);
-      };
       tiers::RequireFeDeConfiguration(
           fe_de_curve_file,
-          {{"tier", tiers::FeDeTier(fe_de).Version()},
-           {"soil", soil_name},
-           {"preset", preset},
-           {"overrides", "none"},
-           {"wheel_diameter_m", number(request.tyre.diameter_m)},
-           {"wheel_width_m", number(request.tyre.width_m)},
-           {"wheel_load_n", number(load_n)}},
+          tiers::FeDeRigConfiguration(tiers::FeDeTier(fe_de).Version(), soil_name, preset, "none",
+                                      request),
           request.slips, "--fe-de-curve");
     }
     std::printf("# gonogo-bench-fe-ann: soil %s, preset %s, %s, %d epochs\n", soil_name.c_str(),

@@ -99,7 +99,20 @@ expect_refusal "a damaged row" "line 5: 'abc'" --fe-de-curve "$work/damaged.csv"
 sed '/^0.5000,/d' "$work/curve.csv" > "$work/three_slips.csv"
 expect_refusal "other slips" "slips are" --fe-de-curve "$work/three_slips.csv"
 
-# 6. ... and compares a tiny model's fe-ann curve with a right one.
+# 6. gonogo-fe-de refuses options that would be ignored: a checkpoint period without a directory,
+#    a curve file or checkpoints for a run that is not one whole curve.
+for args in "--checkpoint-every-s 5|--checkpoint-dir" "--curve-csv x.csv --bevameter|--bevameter" \
+            "--checkpoint-dir ck --stop-after-s 60|--stop-after-s"; do
+  out="$(timeout 30 "$fe_de" "${rig[@]}" ${args%%|*} 2>&1)"
+  rc=$?
+  if [[ $rc -eq 0 || "$out" != *"${args##*|}"* ]]; then
+    fail "gonogo-fe-de ${args%%|*}: exit $rc, expected an error naming ${args##*|}: $out"
+  else
+    echo "ok: gonogo-fe-de ${args%%|*} -> exit $rc: ${out%%$'\n'*}"
+  fi
+done
+
+# 7. The bench compares a tiny model's fe-ann curve with a right file.
 out="$(timeout 600 "$bench" --fe-de-curve "$work/curve.csv" --walks 2 --epochs 5 --threads 2 2>&1)"
 rc=$?
 if [[ $rc -ne 0 ]]; then
