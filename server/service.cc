@@ -396,7 +396,7 @@ grpc::Status MobilityServiceImpl::ListTractionCurves(grpc::ServerContext* contex
     const int page_size =
         request->page_size() == 0 ? 50 : static_cast<int>(std::min(request->page_size(), 1000u));
     cache::CurveFilter filter{request->tier(), request->soil_name(), request->min_cone_index_pa(),
-                              request->max_cone_index_pa()};
+                              request->max_cone_index_pa(), /*key_prefix=*/""};
     // Curves kept private (--private-curves) are listed to their identity alone, and to an admin.
     const std::string scope = jobs_.CurveScope(caller.name);
     if (!scope.empty() && !caller.admin) filter.key_prefix = cache::Scoped(scope, "");
