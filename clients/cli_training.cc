@@ -6,6 +6,7 @@
 //   gonogo dataset [--soil NAME]
 //   gonogo dataset export DATASET --out DIR [--format csv|npy] [--role training|held-out]
 // and the surrogate options of `gonogo curve` and `gonogo map` (AddSurrogateOptions).
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -47,7 +48,18 @@ void PrintModel(const v1::SurrogateModel& m) {
                     : std::string())
             << "\n"
             << "  held out:  worst " << Percent(m.worst_held_out_error());
-  for (const auto& h : m.held_out()) std::cout << "; " << h.path() << " " << Percent(h.replay_error());
+  for (const auto& h : m.held_out()) {
+    std::cout << "; " << h.path() << " " << Percent(h.replay_error());
+    if (h.packings().empty()) continue;
+    // The floor under it: the same path on the RVE's other packings.
+    const auto [least, most] = std::minmax_element(
+        h.packings().begin(), h.packings().end(),
+        [](const auto& a, const auto& b) { return a.difference() < b.difference(); });
+    std::cout << (h.packings_size() == 1 ? " (another packing " : " (other packings ")
+              << Percent(least->difference());
+    if (h.packings_size() > 1) std::cout << " to " << Percent(most->difference());
+    std::cout << ")";
+  }
   std::cout << "\n  made by:   gonogo " << m.code_version() << ", unix ms " << m.created_unix_ms()
             << "\n";
 }
@@ -248,6 +260,12 @@ Command AddTrainCommand(CLI::App& parent) {
            "model's envelope, the paths their RVEs took), their steps carrying this share of the "
            "loss, in [0, 0.99] [default: 0, left out]")
       ->type_name("F");
+  train->add_option_function<uint32_t>(
+           "--floor-packings", [&r](uint32_t v) { r.set_floor_packings(v); },
+           "also run each held-out laboratory path on this many other packings of the soil's "
+           "RVE; the model's record gives their differences from its own packing, the floor "
+           "under its held-out errors, at most 8 [default: 0, none]")
+      ->type_name("N");
   train->add_option_function<std::string>(
            "--name", [&r](const std::string& v) { r.set_name(v); }, "shown in job lists")
       ->type_name("TEXT");

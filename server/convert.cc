@@ -27,6 +27,11 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
     v1::HeldOutError* e = out.add_held_out();
     e->set_path(h.path);
     e->set_replay_error(h.replay_error);
+    for (const tiers::PackingDifference& packing : h.packings) {
+      v1::PackingDifference* p = e->add_packings();
+      p->set_packing_seed(packing.packing_seed);
+      p->set_difference(packing.difference);
+    }
   }
   out.set_worst_held_out_error(m.worst_held_out_error);
   out.set_training_seconds(m.training_seconds);

@@ -13,9 +13,9 @@
 #include <google/protobuf/util/json_util.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <sstream>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -23,6 +23,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 #include "cache/dataset_store.h"
 #include "server/convert.h"
@@ -184,18 +185,27 @@ std::string RecordedSuffix(const std::vector<std::string>& recorded) {
   return names.empty() ? "" : ";recorded=" + names;
 }
 
-// What a stored history is: the soil, the configuration, the RVE's code, the path, and what it
-// records of the RVE's state.
+// What a stored history is: the soil, the configuration, the RVE's code, the path, the RVE's
+// packing when it is not the configuration's own (`packing_seed` 0), and what it records of the
+// RVE's state.
 std::string HistoryKey(const std::string& soil_parameters, const std::string& preset,
                        const std::string& rve_version, const ann::LabPathSpec& spec,
-                       const std::vector<std::string>& recorded) {
+                       const std::vector<std::string>& recorded, unsigned packing_seed = 0) {
   char path[256];
   std::snprintf(path, sizeof path, "path=%s;p=%.17g;max=%.17g;steps=%d;settle=%d;walk=%.17g;seed=%llu",
                 ann::LabPathName(spec.path).c_str(), spec.pressure_pa, spec.max_strain, spec.steps,
                 spec.settle_steps, spec.walk_step_strain,
                 static_cast<unsigned long long>(spec.seed));
   return "gonogo-rve-path-v1;soil=" + soil_parameters + ";preset=" + preset +
-         ";rve=" + rve_version + ";" + path + RecordedSuffix(recorded);
+         ";rve=" + rve_version + ";" + path +
+         (packing_seed > 0 ? ";packing=" + std::to_string(packing_seed) : std::string()) +
+         RecordedSuffix(recorded);
+}
+
+// How many other packings each held-out laboratory path also runs on (the floor under its error).
+int FloorPackingsOf(const v1::TrainSurrogateRequest& request) {
+  Require(request.floor_packings() <= 8, "floor_packings", "must be at most 8 (0: none)");
+  return static_cast<int>(request.floor_packings());
 }
 
 // Runs `tasks` on the pool, at most kInFlightPerWorker per worker at a time, and hands each
@@ -280,6 +290,10 @@ struct PlannedPath {
   std::string role;
   std::string key;
   bool from_rig = false;  // made by the job's rig run, not by a path task of its own
+  // A held-out path on another packing of the RVE (floor_packings): that packing's seed and the
+  // place in the plan of the path it is the floor of; 0 and none for every other path.
+  unsigned packing_seed = 0;
+  size_t floor_of = 0;
 };
 
 // The k-th kept path of a rig run (training or held out), by what the run and the choice were.
@@ -330,6 +344,7 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
   const tiers::SurrogateRecipe recipe = RecipeOf(request, fine_tuning);
   RigRecipeOf(request);
   ValidateFallbackShare(request);
+  FloorPackingsOf(request);
   std::vector<std::string> recorded = recipe.architecture.carried_variables;
   if (fine_tuning) {
     const auto base =
@@ -414,6 +429,24 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
             {path, role, HistoryKey(soil_text, preset, rve_version, path.spec, recorded), false});
       }
     }
+    // The floor under the held-out errors: each held-out laboratory path on other packings of the
+    // soil's RVE (seeds after the configuration's own), stored as held-out histories of their own.
+    const int floor_packings = FloorPackingsOf(request);
+    const unsigned own_packing = tiers::FeDeOptions::Preset(preset).numerics.seed;
+    for (size_t k = 0, lab_paths = planned.size(); k < lab_paths && floor_packings > 0; ++k) {
+      if (planned[k].role != cache::kHeldOutRole) continue;
+      for (int n = 1; n <= floor_packings; ++n) {
+        PlannedPath other = planned[k];
+        other.packing_seed = own_packing + static_cast<unsigned>(n);
+        other.floor_of = k;
+        other.path.name += " on packing " + std::to_string(other.packing_seed);
+        other.key = HistoryKey(soil_text, preset, rve_version, other.path.spec, recorded,
+                               other.packing_seed);
+        planned.push_back(std::move(other));
+      }
+    }
+    const size_t floor_paths = static_cast<size_t>(std::count_if(
+        planned.begin(), planned.end(), [](const PlannedPath& p) { return p.packing_seed > 0; }));
     // Seed 000's step 2: the kept paths of an fe-de rig run's points, after the lab paths.
     const RigRecipe rig = RigRecipeOf(request);
     std::vector<size_t> rig_paths;  // their places in `planned`
@@ -453,6 +486,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       work.mutable_rve_path()->set_soil_parameters(soil_text);
       work.mutable_rve_path()->set_fe_de_preset(preset);
       for (const std::string& name : recorded) work.mutable_rve_path()->add_recorded_variables(name);
+      work.mutable_rve_path()->set_packing_seed(planned[k].packing_seed);
       path_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
       task_path.push_back(k);
     }
@@ -478,8 +512,10 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     status.set_tasks_done(static_cast<uint32_t>(done));
     status.set_cache_hits(static_cast<uint32_t>(stored));
     const auto paths_message = [&] {
-      return std::string(rig.load_n > 0 ? "RVE strain paths and rig paths: " : "RVE strain paths: ") +
+      return std::string(rig.load_n > 0 ? "RVE strain paths and rig paths: "
+                                        : "RVE strain paths: ") +
              std::to_string(done) + " of " + std::to_string(planned.size()) + " (" +
+             (floor_paths > 0 ? std::to_string(floor_paths) + " on other packings; " : "") +
              std::to_string(stored) + " from dataset " + dataset + ")";
     };
     // The paths are most of a training's time: 80 % of the bar.
@@ -543,16 +579,25 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
 
     std::vector<ann::StrainHistory> training, held_out;
     std::vector<std::string> held_out_names;
+    // Of each held-out path, the same path on other packings (its floor).
+    std::vector<std::vector<std::pair<unsigned, ann::StrainHistory>>> held_out_floors;
+    std::map<size_t, size_t> held_out_of_planned;
     v1::TrainMemberWork member_work;
-    for (const PlannedPath& path : planned) {
+    for (size_t k = 0; k < planned.size(); ++k) {
+      const PlannedPath& path = planned[k];
       const std::optional<cache::StoredHistory> row = store.Find(path.key);
       Require(row.has_value(), "dataset", "history of '" + path.path.name + "' is missing");
-      if (path.role == cache::kTrainingRole) {
+      if (path.packing_seed > 0) {  // after the path it is the floor of
+        held_out_floors[held_out_of_planned.at(path.floor_of)].emplace_back(
+            path.packing_seed, ann::ParseHistory(row->history));
+      } else if (path.role == cache::kTrainingRole) {
         training.push_back(ann::ParseHistory(row->history));
         member_work.add_histories(row->history);
       } else {
+        held_out_of_planned[k] = held_out.size();
         held_out.push_back(ann::ParseHistory(row->history));
         held_out_names.push_back(path.path.name);
+        held_out_floors.emplace_back();
       }
     }
 
@@ -646,10 +691,17 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
     record.least_principal_ratio = ensemble.envelope().least_principal_ratio;
+    const tiers::HeldOutResult* worst = nullptr;
     for (size_t k = 0; k < held_out.size(); ++k) {
-      const double error = ann::ReplayError(ensemble, held_out[k]);
-      record.held_out.push_back({held_out_names[k], error});
-      record.worst_held_out_error = std::max(record.worst_held_out_error, error);
+      tiers::HeldOutResult result{held_out_names[k], ann::ReplayError(ensemble, held_out[k]), {}};
+      for (const auto& [seed, other] : held_out_floors[k]) {
+        result.packings.push_back({seed, ann::HistoryDifference(other, held_out[k])});
+      }
+      record.worst_held_out_error = std::max(record.worst_held_out_error, result.replay_error);
+      record.held_out.push_back(std::move(result));
+    }
+    for (const tiers::HeldOutResult& result : record.held_out) {
+      if (result.replay_error == record.worst_held_out_error) worst = &result;
     }
     record.training_seconds = training_seconds;
     record.from_model = request.from_model();
@@ -670,9 +722,23 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
                  "members in {:.1f} s; worst held-out error {:.2f} %)",
                  id, registered.id, planned.size(), generation_seconds, stored, members,
                  training_seconds, 100 * registered.worst_held_out_error);
-    char message[160];
-    std::snprintf(message, sizeof message, "done: model %s, worst held-out error %.2f %%",
-                  registered.id.c_str(), 100 * registered.worst_held_out_error);
+    char worst_text[64];
+    std::snprintf(worst_text, sizeof worst_text, "%.2f %%", 100 * registered.worst_held_out_error);
+    std::string message = "done: model " + registered.id + ", worst held-out error " + worst_text;
+    if (worst != nullptr && !worst->packings.empty()) {
+      // The floor under it: how far the RVE's other packings answer that path.
+      const auto [least, most] = std::minmax_element(
+          worst->packings.begin(), worst->packings.end(),
+          [](const auto& a, const auto& b) { return a.difference < b.difference; });
+      if (worst->packings.size() == 1) {
+        std::snprintf(worst_text, sizeof worst_text, "another packing of the RVE %.2f %%",
+                      100 * least->difference);
+      } else {
+        std::snprintf(worst_text, sizeof worst_text, "other packings of the RVE %.2f to %.2f %%",
+                      100 * least->difference, 100 * most->difference);
+      }
+      message += " (" + worst->path + "; " + worst_text + ")";
+    }
     Finish(id, cache::JobState::kDone, message, json, {"model.json"});
   } catch (const std::exception& e) {
     Finish(id, cache::JobState::kFailed, e.what(), "", {});

@@ -29,9 +29,10 @@ SoilParameters SoilOf(const std::string& canonical_text, const std::string& fiel
 
 std::string RunRvePath(const v1::RvePathWork& work, const ComputeContext& context) {
   const SoilParameters soil = SoilOf(work.soil_parameters(), "training.rve_path.soil_parameters");
-  const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
-  // The template is settled once per process and configuration (SharedRveMaterial), then shared
-  // by every path this rank runs.
+  tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
+  if (work.packing_seed() > 0) fe_de.numerics.seed = work.packing_seed();
+  // The template is settled once per process, configuration and packing (SharedRveMaterial), then
+  // shared by every path this rank runs.
   const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
       soil, fe_de.numerics, "training.rve_path.soil_parameters"));
   if (context.Cancelled()) throw CancelledError();

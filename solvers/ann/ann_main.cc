@@ -107,13 +107,14 @@ std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
 
 // The floor under a held-out error: the same held-out paths run on the soil's RVE packed from
 // other seeds (RveNumerics::seed), their stresses measured against the study's packing's as a
-// surrogate's replay is (ReplayError: sum |sigma_other - sigma| / sum |sigma| over the steps both
-// reached). A surrogate of the soil cannot be told apart from its RVE closer than its packings are
-// from one another.
-void PrintPackingSpread(const CommandLine& line, const SoilParameters& soil,
-                        const tiers::FeDeOptions& preset,
-                        const std::vector<tiers::NamedLabPath>& held_out_paths,
-                        const std::vector<StrainHistory>& held_out) {
+// surrogate's replay is (HistoryDifference: sum |sigma_other - sigma| / sum |sigma| over the steps
+// both reached). A surrogate of the soil cannot be told apart from its RVE closer than its packings
+// are from one another. Returns each path's differences, for a registered model's record.
+std::vector<std::vector<tiers::PackingDifference>> PrintPackingSpread(
+    const CommandLine& line, const SoilParameters& soil, const tiers::FeDeOptions& preset,
+    const std::vector<tiers::NamedLabPath>& held_out_paths,
+    const std::vector<StrainHistory>& held_out) {
+  std::vector<std::vector<tiers::PackingDifference>> differences(held_out.size());
   std::printf("packing_seed,");
   for (const tiers::NamedLabPath& path : held_out_paths) std::printf("%s %%,", path.name.c_str());
   std::printf("generation_s\n");
@@ -127,14 +128,13 @@ void PrintPackingSpread(const CommandLine& line, const SoilParameters& soil,
         RunPaths(*other_rve, held_out_paths, line.threads, "other packing's held-out", {});
     std::printf("%u,", seed);
     for (std::size_t k = 0; k < held_out.size(); ++k) {
-      const std::size_t steps = std::min(held_out[k].steps(), others[k].steps());
-      const std::vector<Vector6> other_stresses(others[k].stresses_pa.begin(),
-                                                others[k].stresses_pa.begin() + steps);
-      std::printf("%.2f,", 100 * ReplayError(other_stresses, held_out[k]));
+      differences[k].push_back({seed, HistoryDifference(others[k], held_out[k])});
+      std::printf("%.2f,", 100 * differences[k].back().difference);
     }
     std::printf("%.1f\n", Since(start));
     std::fflush(stdout);
   }
+  return differences;
 }
 
 MlpArchitecture ParseArchitecture(const std::string& text) {
@@ -289,6 +289,8 @@ struct Study {
   SoilParameters soil;
   std::vector<StrainHistory> training, held_out;
   std::vector<std::string> held_out_names;
+  // Of each held-out path, its differences on other packings (--packing-seeds; rig paths: none).
+  std::vector<std::vector<tiers::PackingDifference>> held_out_packings;
   std::map<double, FeDeReference> references;  // fe-de curves by load
   std::string data_hash;                       // of `training` (HistoriesHash)
 };
@@ -336,7 +338,8 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
     record.least_principal_ratio = ensemble.envelope().least_principal_ratio;
     for (std::size_t k = 0; k < study.held_out.size(); ++k) {
-      record.held_out.push_back({study.held_out_names[k], held_out_errors[k]});
+      record.held_out.push_back(
+          {study.held_out_names[k], held_out_errors[k], study.held_out_packings[k]});
       record.worst_held_out_error = std::max(record.worst_held_out_error, held_out_errors[k]);
     }
     record.training_seconds = train_s;
@@ -511,8 +514,10 @@ int Run(const CommandLine& line) {
   const std::vector<StrainHistory> held_out =
       RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
   const double generation_s = Since(start);
+  std::vector<std::vector<tiers::PackingDifference>> held_out_packings(held_out.size());
   if (!line.packing_seeds.empty()) {
-    PrintPackingSpread(line, entry->parameters, preset, held_out_paths, held_out);
+    held_out_packings =
+        PrintPackingSpread(line, entry->parameters, preset, held_out_paths, held_out);
   }
   std::vector<StrainHistory> training_all = training;
   std::vector<StrainHistory> held_out_all = held_out;
@@ -534,6 +539,7 @@ int Run(const CommandLine& line) {
     for (std::size_t k = 0; k < rig_checks.size(); ++k) {
       held_out_all.push_back(rig_checks[k]);
       held_out_names.push_back("rig point " + std::to_string(k + 1));
+      held_out_packings.emplace_back();
     }
     std::printf("# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
                 "paths recorded, %zu in training, %zu held out\n",
@@ -552,7 +558,12 @@ int Run(const CommandLine& line) {
     WriteHistoriesNpy(line.out + "/training.npy", training_all);
     WriteHistoriesNpy(line.out + "/held_out.npy", held_out_all);
   }
-  Study study{entry->parameters, training_all, held_out_all, held_out_names, references,
+  Study study{entry->parameters,
+              training_all,
+              held_out_all,
+              held_out_names,
+              held_out_packings,
+              references,
               tiers::HistoriesHash(training_all)};
   std::vector<double> history_weights;
   if (line.walk_share > 0) {
@@ -670,7 +681,7 @@ int main(int argc, char** argv) {
                  "also run the held-out paths on the soil's RVE packed from these seeds (the "
                  "study's packing is the preset's, seed 1) and print their stresses' difference "
                  "from the study's packing's, measured as a replay's error: the RVE's own spread, "
-                 "the floor under a held-out error")
+                 "the floor under a held-out error; with --register, in the model's record")
       ->check(CLI::PositiveNumber);
   app.add_option("--validate-load-n", line.validate_loads_n,
                  "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "

@@ -840,4 +840,11 @@ double ReplayError(const StressSurrogate& surrogate, const StrainHistory& histor
   return ReplayError(Replay(surrogate, history), history);
 }
 
+double HistoryDifference(const StrainHistory& other, const StrainHistory& reference) {
+  const std::size_t steps = std::min(other.steps(), reference.steps());
+  return ReplayError(std::vector<Vector6>(other.stresses_pa.begin(),
+                                          other.stresses_pa.begin() + static_cast<long>(steps)),
+                     reference);
+}
+
 }  // namespace gonogo::ann

@@ -215,5 +215,9 @@ std::vector<Vector6> Replay(const StressSurrogate& surrogate, const StrainHistor
 // the tensors).
 double ReplayError(const std::vector<Vector6>& replayed, const StrainHistory& history);
 double ReplayError(const StressSurrogate& surrogate, const StrainHistory& history);
+// The same path run on another RVE (`other`: another packing of the soil) against `reference`,
+// measured as a replay is (ReplayError), over the steps both reached (a stress-controlled step
+// can stop either): how far two answers the surrogate cannot tell apart lie from each other.
+double HistoryDifference(const StrainHistory& other, const StrainHistory& reference);
 
 }  // namespace gonogo::ann

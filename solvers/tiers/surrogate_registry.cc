@@ -27,7 +27,8 @@ std::string Number(double value) {
   return text;
 }
 
-// One "key = value" per line; held-out errors as "held_out = <error> <path>".
+// One "key = value" per line; held-out errors as "held_out = <error> <path>", each followed by its
+// differences on other packings as "held_out_packing = <seed> <difference> <path>".
 std::string RecordText(const RegisteredSurrogate& r) {
   std::ostringstream out;
   out << kRecordHeader << "\n"
@@ -52,6 +53,10 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "created_unix_ms = " << r.created_unix_ms << "\n";
   for (const HeldOutResult& result : r.held_out) {
     out << "held_out = " << Number(result.replay_error) << " " << result.path << "\n";
+    for (const PackingDifference& packing : result.packings) {
+      out << "held_out_packing = " << packing.packing_seed << " " << Number(packing.difference)
+          << " " << result.path << "\n";
+    }
   }
   return out.str();
 }
@@ -71,7 +76,17 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
       if (key == "held_out") {
         const std::size_t space = value.find(' ');
         if (space == std::string::npos) return std::nullopt;
-        r.held_out.push_back({value.substr(space + 1), std::stod(value.substr(0, space))});
+        r.held_out.push_back({value.substr(space + 1), std::stod(value.substr(0, space)), {}});
+      } else if (key == "held_out_packing") {  // of the held-out path before it
+        std::istringstream fields(value);
+        PackingDifference packing;
+        std::string path;
+        if (!(fields >> packing.packing_seed >> packing.difference) || r.held_out.empty()) {
+          return std::nullopt;
+        }
+        std::getline(fields >> std::ws, path);
+        if (path != r.held_out.back().path) return std::nullopt;
+        r.held_out.back().packings.push_back(packing);
       } else {
         values[key] = value;
       }

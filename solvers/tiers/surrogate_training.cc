@@ -262,7 +262,7 @@ TrainedSurrogate TrainSurrogateOnRve(
   trained.training_seconds = Seconds(train_start);
   for (std::size_t k = 0; k < trained.held_out.size(); ++k) {
     const double error = ann::ReplayError(trained.ensemble, trained.held_out[k]);
-    trained.held_out_errors.push_back({held_out_names[k], error});
+    trained.held_out_errors.push_back({held_out_names[k], error, {}});
     trained.worst_held_out_error = std::max(trained.worst_held_out_error, error);
   }
   if (stage) stage("training", 1);

@@ -73,9 +73,17 @@ ann::InternalVariables RveFabricVariables();
 // InputError(field, ...) for a name it does not read.
 ann::InternalVariables RveVariables(const std::vector<std::string>& names, const std::string& field);
 
+// The same held-out path on another packing of the soil's RVE: its difference from the training
+// packing's (ann::HistoryDifference), the floor under a surrogate's replay error on that path.
+struct PackingDifference {
+  unsigned packing_seed = 0;  // RveNumerics::seed
+  double difference = 0;      // a fraction
+};
+
 struct HeldOutResult {
   std::string path;
   double replay_error = 0;  // ReplayError: mean |sigma error| / mean |sigma|
+  std::vector<PackingDifference> packings;  // empty: not measured
 };
 
 struct TrainedSurrogate {

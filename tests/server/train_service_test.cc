@@ -223,6 +223,54 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << rig_index;
   EXPECT_NE(rig_index.find(",rig-point,rig point 2,held-out,"), std::string::npos) << rig_index;
 
+  // The floor under the held-out errors: each held-out laboratory path also run on two other
+  // packings of the RVE (14 new paths, the recipe's 27 from the dataset), its differences from
+  // its own packing in the model's record, the worst path's in the job's last word.
+  const CliRun floor = Gonogo(
+      server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --floor-packings 2");
+  ASSERT_EQ(floor.exit_code, 0) << floor.out;
+  EXPECT_NE(floor.out.find("RVE strain paths: 27 of 41 (14 on other packings; 27 from dataset"),
+            std::string::npos)
+      << floor.out;
+  const std::string floor_id = RegisteredId(floor.out);
+  ASSERT_FALSE(floor_id.empty()) << floor.out;
+  const std::string floor_held_out = LineAfter(floor.out, "held out:");
+  EXPECT_EQ(CountOccurrences(floor_held_out, "(other packings "), 7u)
+      << "each of the 7 held-out laboratory paths:\n"
+      << floor.out;
+  // The packings answer a 100-grain RVE's triaxial far apart (solvers/ann/README.md: 20-70 %).
+  ASSERT_TRUE(std::regex_search(
+      floor_held_out, match,
+      std::regex("triaxial [0-9.]+ kPa [0-9.]+ % \\(other packings ([0-9.]+) % to ([0-9.]+) %\\)")))
+      << floor_held_out;
+  EXPECT_GT(std::stod(match[1]), 1.0) << floor_held_out;
+  EXPECT_NE(floor.out.find("other packings of the RVE "), std::string::npos)
+      << "the job's last word names the worst path's floor:\n"
+      << floor.out;
+  // The same model's record without the floor: the paths on other packings are data, not
+  // training (same data hash as the first 16x16 model's).
+  const CliRun floor_models = Gonogo(server.endpoint(), "models --soil seed000_sand_rve100");
+  EXPECT_EQ(LineAfter(ModelBlock(floor_models.out, floor_id), "hash ").substr(0, 16),
+            LineAfter(ModelBlock(floor_models.out, trained), "hash ").substr(0, 16))
+      << floor_models.out;
+  // One packing of the two: every path from the dataset, each packing kept under its own key.
+  const CliRun floor_again = Gonogo(
+      server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --floor-packings 1");
+  ASSERT_EQ(floor_again.exit_code, 0) << floor_again.out;
+  EXPECT_NE(floor_again.out.find("tasks 37/37  cache hits 34"), std::string::npos)
+      << floor_again.out;
+  EXPECT_EQ(CountOccurrences(LineAfter(floor_again.out, "held out:"), "(another packing "), 7u)
+      << floor_again.out;
+  const std::string floor_export_dir = (dir.path() / "export-floor").string();
+  ASSERT_EQ(Gonogo(server.endpoint(),
+                   "dataset export " + dataset + " --role held-out --out " + floor_export_dir)
+                .exit_code,
+            0);
+  const std::string floor_index =
+      ReadFile(fs::path(floor_export_dir) / (dataset + "-held-out.paths.csv"));
+  EXPECT_EQ(CountOccurrences(floor_index, " on packing 2,held-out,"), 7u) << floor_index;
+  EXPECT_EQ(CountOccurrences(floor_index, " on packing 3,held-out,"), 7u) << floor_index;
+
   // Refused by field, before anything runs.
   const std::vector<std::pair<std::string, std::string>> refusals = {
       {"train --soil no-such-soil", "soil_name: no dem-hertz-mindlin soil 'no-such-soil'"},
@@ -233,13 +281,15 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       {"train --soil seed000_sand_rve100 --pressures-kpa 5 2", "pressures_kpa: must be in"},
       {"train --soil seed000_sand_rve100 --members 2", "members: must lie in [3, 64]"},
       {"train --soil seed000_sand_rve100 --rig-points 4", "rig_load_n: is needed with"},
+      {"train --soil seed000_sand_rve100 --floor-packings 9", "floor_packings: must be at most 8"},
       {"train --soil seed000_sand_rve100 --rig-load-n 1000 --rig-width-m 0.6",
        "rig_width_m: must lie in (0, rig_diameter_m]"},
       {"dataset export no-such --out " + exported.string(), "NOT_FOUND: dataset_id"},
       {"train --soil seed000_sand_rve100 --carry void_ratio",
        "carried_variables: 'void_ratio' is not a variable of the RVE's state"},
-      {"train --soil seed000_sand_rve100 --carry fabric_xz", "carried_variables: 'fabric_xz' is a "
-                                                             "tensor's component"},
+      {"train --soil seed000_sand_rve100 --carry fabric_xz",
+       "carried_variables: 'fabric_xz' is a "
+       "tensor's component"},
       {"train --soil seed000_sand_rve100 --from " + trained + " --carry coordination_number",
        "carried_variables: a fine-tuned model carries what its base model carries"},
   };

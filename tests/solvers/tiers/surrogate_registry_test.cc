@@ -46,7 +46,7 @@ RegisteredSurrogate Record(const std::string& id, const std::string& soil, doubl
   r.spread_threshold = 0.04;
   r.tensile_limit_pa = 12.0;
   r.least_principal_ratio = 0.25;
-  r.held_out = {{"triaxial 14.1 kPa", worst_error / 2}, {"rig point 1", worst_error}};
+  r.held_out = {{"triaxial 14.1 kPa", worst_error / 2, {}}, {"rig point 1", worst_error, {}}};
   r.worst_held_out_error = worst_error;
   r.training_seconds = 1.5;
   r.code_version = "test";
@@ -70,6 +70,8 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   RegisteredSurrogate fine_tuned = Record("sand-a", "sand", 0.05, 1000);
   fine_tuned.fallback_paths = 7;
   fine_tuned.fallback_paths_share = 0.2;
+  // The floor under the triaxial's error: that path on two other packings of the RVE.
+  fine_tuned.held_out[0].packings = {{2, 0.125}, {3, 0.0625}};
   const RegisteredSurrogate a = registry.Register(fine_tuned, Ensemble());
   registry.Register(Record("sand-b", "sand", 0.03, 2000), Ensemble());
   registry.Register(Record("sand-c", "sand", 0.03, 1500), Ensemble());
@@ -90,6 +92,11 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   ASSERT_EQ(described->held_out.size(), 2u);
   EXPECT_EQ(described->held_out[0].path, "triaxial 14.1 kPa");
   EXPECT_EQ(described->held_out[1].replay_error, 0.05);
+  ASSERT_EQ(described->held_out[0].packings.size(), 2u);
+  EXPECT_EQ(described->held_out[0].packings[1].packing_seed, 3u);
+  EXPECT_EQ(described->held_out[0].packings[1].difference, 0.0625);
+  EXPECT_TRUE(described->held_out[1].packings.empty());
+  EXPECT_TRUE(registry.Describe("sand-b")->held_out[0].packings.empty());
   // The registered files are the ensemble.
   const ann::SurrogateEnsemble loaded = ann::SurrogateEnsemble::Load(a.directory);
   EXPECT_EQ(loaded.size(), Ensemble().size());
@@ -157,6 +164,27 @@ TEST_F(SurrogateRegistryTest, ReadsARecordMadeBeforeItsLaterFields) {
   EXPECT_TRUE(std::isinf(old->tensile_limit_pa));
   EXPECT_EQ(old->least_principal_ratio, 0);
   EXPECT_EQ(old->samples, 60);
+}
+
+// A packing's difference belongs to the held-out path on the line before it; one that names
+// another path, or cannot be read, makes the record unreadable rather than misattributed.
+TEST_F(SurrogateRegistryTest, RefusesAPackingDifferenceOfAnotherPath) {
+  const SurrogateRegistry registry(root_.string());
+  for (const std::string& line : {std::string("held_out_packing = 2 0.1 triaxial 99 kPa"),
+                                  std::string("held_out_packing = two 0.1 rig point 1")}) {
+    const std::string id = line.find("two") == std::string::npos ? "stray" : "unreadable";
+    registry.Register(Record(id, "sand", 0.05, 1000), Ensemble());
+    ASSERT_TRUE(registry.Describe(id).has_value());
+    std::ofstream(root_ / id / "model.txt", std::ios::app) << line << "\n";
+    EXPECT_FALSE(registry.Describe(id).has_value()) << line;
+  }
+  registry.Register(Record("kept", "sand", 0.05, 1000), Ensemble());
+  std::ofstream(root_ / "kept" / "model.txt", std::ios::app)
+      << "held_out_packing = 4 0.25 rig point 1\n";
+  const std::optional<RegisteredSurrogate> kept = registry.Describe("kept");
+  ASSERT_TRUE(kept.has_value());
+  ASSERT_EQ(kept->held_out[1].packings.size(), 1u);
+  EXPECT_EQ(kept->held_out[1].packings[0].difference, 0.25);
 }
 
 TEST_F(SurrogateRegistryTest, WhatACrashLeavesIsNeitherListedNorKept) {
