@@ -163,9 +163,10 @@ def test_surrogate_models_and_a_refused_training(client):
 
 def test_a_trained_model_computes_an_fe_ann_curve_and_says_how(tiny_server):
     with gonogo.Client("@" + tiny_server) as client:
-        # The service tests' small recipe: 20-step paths, 4 walks, a 16 x 16 network, 60 epochs.
+        # The service tests' small recipe: 20-step paths, 4 walks, a 16 x 16 network, 60 epochs;
+        # each held-out path also on another packing of the RVE (the floor under its error).
         job = client.train(soil="seed000_sand_rve100", steps=20, walks=4, epochs=60,
-                           hidden_widths=[16, 16])
+                           hidden_widths=[16, 16], floor_packings=1)
         assert job.wait().state == gonogo.client.pb.JOB_STATE_DONE
         model = job.model()
         assert model.soil_name == "seed000_sand_rve100"
@@ -173,6 +174,9 @@ def test_a_trained_model_computes_an_fe_ann_curve_and_says_how(tiny_server):
         assert model.fe_de_preset == "tiny"
         assert model.samples > 0 and len(model.held_out) > 0
         assert model.fallback_paths == 0
+        floors = [h.packings for h in model.held_out]
+        assert len(floors) == 7 and all(len(f) == 1 for f in floors), model.held_out
+        assert all(f[0].packing_seed == 2 and f[0].difference > 0 for f in floors), model.held_out
         assert [m.id for m in client.models(soil="seed000_sand_rve100")] == [model.id]
 
         tyre = {"diameter_m": 0.5, "width_m": 0.2, "section_height_m": 0.1}
