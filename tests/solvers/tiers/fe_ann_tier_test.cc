@@ -12,7 +12,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include "solvers/ann/stress_surrogate.h"
 #include "solvers/common/errors.h"
+#include "solvers/dem/rve/rve_soil.h"
 #include "solvers/tiers/empirical_tier.h"
 #include "solvers/tiers/fe_ann_tier.h"
 #include "solvers/tiers/soil_catalogue.h"
@@ -147,7 +149,10 @@ double FeAnnTierTest::fe_de_seconds_ = 0;
 // off; with 96 (5,016 samples) every laboratory path and the walks from 14 kPa up are within 5 %
 // (measured 2.8, 2.1, 4.1 and 4.5, 3.7, 3.3 %). The walk at 3.5 kPa is not (12.3 %): near the
 // surface layer's pressure the packing's stress is a few kPa carried by few contacts, and the
-// error is relative to that. The test holds both.
+// error is relative to that. There the test holds the floor instead: the same walk on three
+// other packings of the soil's RVE (seeds 2, 3, 4) differs from the training packing's by
+// 10.9-12.8 %, and a surrogate of the soil is asked to be no further from its RVE than the
+// furthest of those packings.
 TEST(SurrogateOnRve, ReplaysHeldOutPathsWithinFivePercentGivenEnoughWalks) {
   const SurrogateRecipe recipe = TinyRecipe(96);
   const TrainedSurrogate trained = TrainOnTheSoilsRve(recipe);
@@ -163,7 +168,20 @@ TEST(SurrogateOnRve, ReplaysHeldOutPathsWithinFivePercentGivenEnoughWalks) {
     const bool low_pressure_walk =
         paths[k].spec.path == ann::LabPath::kRandomWalk && paths[k].spec.pressure_pa < 5e3;
     if (low_pressure_walk) {
-      EXPECT_LT(error, 0.15) << paths[k].name;
+      double floor = 0;
+      for (unsigned seed : {2u, 3u, 4u}) {
+        FeDeOptions other = TinyFeDeOptions();
+        other.numerics.seed = seed;
+        const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
+            BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters,
+            other.numerics, "soil"));
+        const double difference = ann::HistoryDifference(
+            RunLabPaths(*rve, {paths[k]}, 1).front(), trained.held_out[k]);
+        std::cout << "    on packing " << seed << ": " << 100 * difference << " %\n";
+        floor = std::max(floor, difference);
+      }
+      EXPECT_GT(floor, 0.05) << "the floor is above the issue's 5 % on this path";
+      EXPECT_LE(error, floor) << paths[k].name << ": further from its RVE than its other packings";
     } else {
       EXPECT_LE(error, 0.05) << paths[k].name << ": the issue's 5 %";
       walks_checked += paths[k].spec.path == ann::LabPath::kRandomWalk;
