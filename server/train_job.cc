@@ -691,7 +691,6 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
     record.least_principal_ratio = ensemble.envelope().least_principal_ratio;
-    const tiers::HeldOutResult* worst = nullptr;
     for (size_t k = 0; k < held_out.size(); ++k) {
       tiers::HeldOutResult result{held_out_names[k], ann::ReplayError(ensemble, held_out[k]), {}};
       for (const auto& [seed, other] : held_out_floors[k]) {
@@ -700,9 +699,9 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       record.worst_held_out_error = std::max(record.worst_held_out_error, result.replay_error);
       record.held_out.push_back(std::move(result));
     }
-    for (const tiers::HeldOutResult& result : record.held_out) {
-      if (result.replay_error == record.worst_held_out_error) worst = &result;
-    }
+    const auto worst = std::max_element(
+        record.held_out.begin(), record.held_out.end(),
+        [](const auto& a, const auto& b) { return a.replay_error < b.replay_error; });
     record.training_seconds = training_seconds;
     record.from_model = request.from_model();
     record.code_version = GONOGO_VERSION;
@@ -725,7 +724,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     char worst_text[64];
     std::snprintf(worst_text, sizeof worst_text, "%.2f %%", 100 * registered.worst_held_out_error);
     std::string message = "done: model " + registered.id + ", worst held-out error " + worst_text;
-    if (worst != nullptr && !worst->packings.empty()) {
+    if (worst != record.held_out.end() && !worst->packings.empty()) {
       // The floor under it: how far the RVE's other packings answer that path.
       const auto [least, most] = std::minmax_element(
           worst->packings.begin(), worst->packings.end(),

@@ -288,8 +288,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       {"train --soil seed000_sand_rve100 --carry void_ratio",
        "carried_variables: 'void_ratio' is not a variable of the RVE's state"},
       {"train --soil seed000_sand_rve100 --carry fabric_xz",
-       "carried_variables: 'fabric_xz' is a "
-       "tensor's component"},
+       "carried_variables: 'fabric_xz' is a tensor's component"},
       {"train --soil seed000_sand_rve100 --from " + trained + " --carry coordination_number",
        "carried_variables: a fine-tuned model carries what its base model carries"},
   };
