@@ -48,7 +48,8 @@ class SurrogateModelSource {
   virtual ~SurrogateModelSource() = default;
   // The model `id`, or nullopt.
   virtual std::optional<SurrogateModelRecord> Find(const std::string& id) const = 0;
-  // The best model (lowest held-out error) for the soil and configuration, or nullopt.
+  // The best model for the soil and configuration (the registry: its held-out errors least beyond
+  // their RVE's own spread), or nullopt.
   virtual std::optional<SurrogateModelRecord> Best(const std::string& soil_parameters,
                                                    const std::string& fe_de_preset) const = 0;
 };

@@ -174,12 +174,32 @@ std::vector<RegisteredSurrogate> SurrogateRegistry::List(const std::string& soil
   return models;
 }
 
+double WorstErrorBeyondFloor(const RegisteredSurrogate& model) {
+  if (model.held_out.empty()) return model.worst_held_out_error;
+  double worst = 0;
+  for (const HeldOutResult& path : model.held_out) {
+    double floor = 0;
+    for (const PackingDifference& packing : path.packings) {
+      floor = std::max(floor, packing.difference);
+    }
+    worst = std::max(worst, path.replay_error - floor);
+  }
+  return worst;
+}
+
 std::optional<SurrogateModelRecord> SurrogateRegistry::Best(const std::string& soil_parameters,
                                                             const std::string& fe_de_preset) const {
   std::optional<RegisteredSurrogate> best;
+  double best_beyond_floor = 0;
   for (RegisteredSurrogate& model : List()) {  // newest first: ties go to the newest
     if (model.soil_parameters != soil_parameters || model.fe_de_preset != fe_de_preset) continue;
-    if (!best || model.worst_held_out_error < best->worst_held_out_error) best = std::move(model);
+    const double beyond_floor = WorstErrorBeyondFloor(model);
+    if (!best || beyond_floor < best_beyond_floor ||
+        (beyond_floor == best_beyond_floor &&
+         model.worst_held_out_error < best->worst_held_out_error)) {
+      best_beyond_floor = beyond_floor;
+      best = std::move(model);
+    }
   }
   if (!best) return std::nullopt;
   return static_cast<SurrogateModelRecord>(*best);

@@ -46,12 +46,19 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   std::int64_t created_unix_ms = 0;
 };
 
+// How far a model's held-out errors lie beyond its RVE's own spread: over the held-out paths, the
+// largest of (error - the path's largest difference on another packing of the RVE), at least 0; a
+// path not run on other packings counts whole. A model whose every path is within its floor scores
+// 0: the held-out set cannot tell it from its RVE. A record without held-out paths: its worst
+// error.
+double WorstErrorBeyondFloor(const RegisteredSurrogate& model);
+
 class SurrogateRegistry : public SurrogateModelSource {
  public:
   explicit SurrogateRegistry(std::string root);
 
   std::optional<SurrogateModelRecord> Find(const std::string& id) const override;
-  // The smallest worst held-out error, the newest among equals.
+  // The smallest WorstErrorBeyondFloor, then the smallest worst held-out error, then the newest.
   std::optional<SurrogateModelRecord> Best(const std::string& soil_parameters,
                                            const std::string& fe_de_preset) const override;
   std::optional<RegisteredSurrogate> Describe(const std::string& id) const;

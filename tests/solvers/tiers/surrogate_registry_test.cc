@@ -1,16 +1,17 @@
 // The fe-ann tier's model registry (solvers/tiers/surrogate_registry.h) on a real directory: models
 // registered with their provenance, found, chosen by their held-out error, listed; ids refused
 // when malformed or taken; what a crash mid-registration leaves is neither listed nor kept.
-#include <gtest/gtest.h>
+#include "solvers/tiers/surrogate_registry.h"
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "solvers/common/errors.h"
-#include "solvers/tiers/surrogate_registry.h"
 #include "tests/solvers/ann/drucker_prager_paths.h"
 
 namespace gonogo::tiers {
@@ -117,6 +118,48 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(registry.NewId("seed000 sand", "mlp-8"), "seed000-sand-mlp-8-1");
   EXPECT_FALSE(registry.Find("no-such").has_value());
   EXPECT_FALSE(registry.Find("../sand-a").has_value());
+}
+
+TEST_F(SurrogateRegistryTest, BestJudgesAHeldOutErrorAgainstItsRvesOwnSpread) {
+  const SurrogateRegistry registry(root_.string());
+  const auto with_held_out = [](const std::string& id, std::vector<HeldOutResult> held_out,
+                                std::int64_t created_unix_ms) {
+    RegisteredSurrogate r = Record(id, "sand", 0, created_unix_ms);
+    r.held_out = std::move(held_out);
+    r.worst_held_out_error = 0;
+    for (const HeldOutResult& path : r.held_out) {
+      r.worst_held_out_error = std::max(r.worst_held_out_error, path.replay_error);
+    }
+    return r;
+  };
+  // No floor measured: the whole error (triaxial 0.0234375, rig point 0.046875).
+  const RegisteredSurrogate plain = Record("sand-plain", "sand", 0.046875, 4000);
+  // The walk within the furthest of its other packings: the triaxial's error is what is left.
+  const RegisteredSurrogate floored = with_held_out(
+      "sand-floored",
+      {{"walk 3.5 kPa", 0.125, {{2, 0.1}, {3, 0.15625}}}, {"triaxial", 0.03125, {}}}, 3000);
+  // As far beyond its floor, a smaller worst error: it wins the tie though older.
+  const RegisteredSurrogate tied = with_held_out(
+      "sand-tied", {{"walk 3.5 kPa", 0.09375, {{2, 0.125}}}, {"triaxial", 0.03125, {}}}, 1000);
+  // The walk 0.0625 beyond its floor.
+  const RegisteredSurrogate beyond = with_held_out(
+      "sand-beyond", {{"walk 3.5 kPa", 0.25, {{2, 0.1875}}}, {"triaxial", 0.015625, {}}}, 2000);
+  EXPECT_EQ(WorstErrorBeyondFloor(plain), 0.046875);
+  EXPECT_EQ(WorstErrorBeyondFloor(floored), 0.03125);
+  EXPECT_EQ(WorstErrorBeyondFloor(tied), 0.03125);
+  EXPECT_EQ(WorstErrorBeyondFloor(beyond), 0.0625);
+  for (const RegisteredSurrogate& model : {plain, floored, beyond}) {
+    registry.Register(model, Ensemble());
+  }
+  // Worst errors 0.047, 0.125, 0.25: the floored model is chosen, though its worst is not least.
+  EXPECT_EQ(registry.Best("model=dem-hertz-mindlin;soil=sand", "tiny")->id, "sand-floored");
+  registry.Register(tied, Ensemble());
+  EXPECT_EQ(registry.Best("model=dem-hertz-mindlin;soil=sand", "tiny")->id, "sand-tied");
+
+  // A record without held-out paths is judged by its worst error.
+  RegisteredSurrogate bare = Record("sand-bare", "sand", 0.5, 5000);
+  bare.held_out.clear();
+  EXPECT_EQ(WorstErrorBeyondFloor(bare), 0.5);
 }
 
 TEST_F(SurrogateRegistryTest, RefusesMalformedAndTakenIds) {
