@@ -59,6 +59,8 @@ struct CommandLine {
   double rig_width_m = 0.2;
   int rig_points = 16;
   std::vector<double> validate_loads_n;
+  // --validate-load-n's runs at each of these multiples of the model's spread threshold.
+  std::vector<double> validate_spread_scales = {1.0};
   std::string register_data_dir;  // non-empty: register each MLP ensemble there
   std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
   double rest_kpa = 0;            // > 0: only the rest test at this pressure
@@ -73,6 +75,7 @@ struct CommandLine {
   int epochs = 300;
   double path_stress_weighting = 0;
   double walk_share = 0;  // > 0: the random walks' share of the loss
+  double walk_persistence = 0;  // the training walks' (ann::LabPathSpec::walk_persistence)
   std::uint64_t training_seed = 1;
   bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
   int return_after_steps = 0;  // --validate-load-n: fallen-back points return to the network
@@ -239,48 +242,51 @@ struct FeDeReference {
 
 // The ensemble as the fe-ann tier's model, run at each validation load against fe-de.
 void Validate(const CommandLine& line, const std::string& model_directory,
-              const std::string& architecture, const SoilParameters& soil,
-              std::map<double, FeDeReference>& references) {
+              const std::string& architecture, double model_spread_threshold,
+              const SoilParameters& soil, std::map<double, FeDeReference>& references) {
   tiers::SurrogateModelRecord record;
   record.id = architecture;
   record.directory = model_directory;
   record.soil_parameters = CanonicalText(soil);
   record.fe_de_preset = line.preset;
-  tiers::FeAnnOptions options;
-  options.fe_de = tiers::FeDeOptions::Preset(line.preset);
-  options.return_after_steps = line.return_after_steps;
-  const tiers::FeAnnTier fe_ann(
-      options, std::make_shared<tiers::ListedSurrogateModels>(
-                   std::vector<tiers::SurrogateModelRecord>{record}));
-  const tiers::FeDeTier fe_de(options.fe_de);
-  for (double load_n : line.validate_loads_n) {
-    const TractionRequest request = RigRequest(line, load_n);
-    if (references.count(load_n) == 0) {
+  const auto models = std::make_shared<tiers::ListedSurrogateModels>(
+      std::vector<tiers::SurrogateModelRecord>{record});
+  const tiers::FeDeTier fe_de(tiers::FeDeOptions::Preset(line.preset));
+  for (double spread_scale : line.validate_spread_scales) {
+    tiers::FeAnnOptions options;
+    options.fe_de = tiers::FeDeOptions::Preset(line.preset);
+    options.return_after_steps = line.return_after_steps;
+    // 1: the model's own (0 in the options); the envelope's distance threshold stays the model's.
+    options.spread_threshold = spread_scale == 1.0 ? 0.0 : spread_scale * model_spread_threshold;
+    const tiers::FeAnnTier fe_ann(options, models);
+    for (double load_n : line.validate_loads_n) {
+      const TractionRequest request = RigRequest(line, load_n);
+      if (references.count(load_n) == 0) {
+        const auto start = std::chrono::steady_clock::now();
+        references[load_n].run = fe_de.Run(request, {});
+        references[load_n].seconds = Since(start);
+      }
+      const FeDeReference& reference = references[load_n];
       const auto start = std::chrono::steady_clock::now();
-      references[load_n].run = fe_de.Run(request, {});
-      references[load_n].seconds = Since(start);
+      const tiers::AnnRunReport ann = fe_ann.Run(request, {});
+      const double seconds = Since(start);
+      const auto& a = ann.curve.points;
+      const auto& d = reference.run.curve.points;
+      const tiers::CurveDifference worst =
+          tiers::WorstDifference(ann.curve, reference.run.curve, request);
+      std::printf("validate,%s,%g,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%lld,%.2f,%.2f,%.2f\n",
+                  architecture.c_str(), spread_scale, load_n, reference.seconds, seconds,
+                  reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
+                  ann.fallbacks, static_cast<long long>(ann.returns),
+                  static_cast<long long>(ann.stress_returns), 100 * worst.drawbar_pull_over_w,
+                  100 * worst.torque_over_rw, 100 * worst.sinkage_over_r);
+      for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
+        std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
+                    a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
+                    d[k].torque_nm, 1e3 * a[k].sinkage_m, 1e3 * d[k].sinkage_m);
+      }
+      std::fflush(stdout);
     }
-    const FeDeReference& reference = references[load_n];
-    const auto start = std::chrono::steady_clock::now();
-    const tiers::AnnRunReport ann = fe_ann.Run(request, {});
-    const double seconds = Since(start);
-    const auto& a = ann.curve.points;
-    const auto& d = reference.run.curve.points;
-    const tiers::CurveDifference worst =
-        tiers::WorstDifference(ann.curve, reference.run.curve, request);
-    std::printf("validate,%s,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%lld,%.2f,%.2f,%.2f\n",
-                architecture.c_str(), load_n, reference.seconds, seconds,
-                reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
-                ann.fallbacks, static_cast<long long>(ann.returns),
-                static_cast<long long>(ann.stress_returns),
-                100 * worst.drawbar_pull_over_w, 100 * worst.torque_over_rw,
-                100 * worst.sinkage_over_r);
-    for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
-      std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
-                  a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
-                  d[k].torque_nm, 1e3 * a[k].sinkage_m, 1e3 * d[k].sinkage_m);
-    }
-    std::fflush(stdout);
   }
 }
 
@@ -361,9 +367,10 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                                .string()
                          : line.out + "/" + name;
     if (line.out.empty()) ensemble.Save(directory);
-    std::printf("validate,architecture,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
-                "fallback_s,fallbacks,returns,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
-    Validate(line, directory, name, study.soil, study.references);
+    std::printf(
+        "validate,architecture,spread_scale,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
+        "fallback_s,fallbacks,returns,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
+    Validate(line, directory, name, ensemble.spread_threshold(), study.soil, study.references);
     if (line.out.empty()) std::filesystem::remove_all(directory);
   }
 }
@@ -504,7 +511,13 @@ int Run(const CommandLine& line) {
     for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
   }
   recipe.Validate("");
-  const std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
+  std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
+  // Only the training walks persist; the held-out walks stay the yardstick every model is read by.
+  for (tiers::NamedLabPath& path : training_paths) {
+    if (path.spec.path == ann::LabPath::kRandomWalk) {
+      path.spec.walk_persistence = line.walk_persistence;
+    }
+  }
   const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
   const InternalVariables internal = line.record_fabric || !line.carried.empty()
                                          ? tiers::RveFabricVariables()
@@ -686,6 +699,11 @@ int main(int argc, char** argv) {
   app.add_option("--validate-load-n", line.validate_loads_n,
                  "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
                  "fe-de");
+  app.add_option("--validate-spread-scales", line.validate_spread_scales,
+                 "--validate-load-n's runs once at each of these multiples of the model's spread "
+                 "threshold (below 1: more points fall back to the RVE)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--register", line.register_data_dir,
                  "register each MLP ensemble with its provenance in this gonogo-server data "
                  "directory (DATA_DIR/models), where the fe-ann tier finds it")
@@ -734,6 +752,11 @@ int main(int argc, char** argv) {
   app.add_option("--walk-share", line.walk_share,
                  "the random walks' share of the training loss (their steps weighed to give it); "
                  "0: their share of the steps")
+      ->check(CLI::Range(0.0, 0.99))
+      ->capture_default_str();
+  app.add_option("--walk-persistence", line.walk_persistence,
+                 "the training walks' correlation of one step's direction with the last's (0: "
+                 "drawn afresh; 0.9: loading on for about 10 steps); held-out walks stay at 0")
       ->check(CLI::Range(0.0, 0.99))
       ->capture_default_str();
   app.add_option("--training-seed", line.training_seed,

@@ -102,6 +102,9 @@ void LabPathSpec::Validate(const std::string& field_prefix) const {
   if (!(walk_step_strain > 0 && walk_step_strain <= max_strain)) {
     throw InputError(field_prefix + "walk_step_strain", "must be in (0, max_strain]");
   }
+  if (!(walk_persistence >= 0 && walk_persistence < 1)) {
+    throw InputError(field_prefix + "walk_persistence", "must be in [0, 1)");
+  }
 }
 
 StrainHistory RunLabPath(const material::ConstitutiveModel& model, const LabPathSpec& spec,
@@ -166,16 +169,18 @@ StrainHistory RunLabPath(const material::ConstitutiveModel& model, const LabPath
     case LabPath::kRandomWalk: {
       std::mt19937_64 random(spec.seed);
       std::normal_distribution<double> normal(0.0, 1.0);
+      const double rho = spec.walk_persistence, fresh = std::sqrt(1 - rho * rho);
       Vector6 walked = Vector6::Zero();
+      Vector6 direction = Vector6::Zero();  // g_k of the header's AR(1) process
       for (int k = 0; k < spec.steps; ++k) {
-        Vector6 direction;
-        for (int c = 0; c < 6; ++c) direction[c] = normal(random);
+        for (int c = 0; c < 6; ++c) direction[c] = rho * direction[c] + fresh * normal(random);
         MixedStep step;
         step.strain_increment = spec.walk_step_strain * direction / direction.norm();
         for (int c : {kXx, kYy, kZz}) step.strain_increment[c] -= spec.walk_step_strain / 12;
         for (int c = 0; c < 6; ++c) {
           if (std::abs(walked[c] + step.strain_increment[c]) > spec.max_strain) {
             step.strain_increment[c] = -step.strain_increment[c];
+            direction[c] = -direction[c];  // a persistent walk turns back from the bound
           }
         }
         if (!recorder.Apply(step)) break;

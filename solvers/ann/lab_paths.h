@@ -18,7 +18,12 @@
 //                  direction uniform on the 6-sphere, seeded), reflected at +- max_strain per
 //                  component from the settled state, with a compressive drift of a quarter of a
 //                  step per step in the volumetric strain, so that a cohesionless point keeps
-//                  contact. The envelope of the inputs is what these bounds state.
+//                  contact. The envelope of the inputs is what these bounds state. With
+//                  walk_persistence rho > 0 the directions are correlated from step to step: the
+//                  direction is that of g_k = rho g_(k-1) + sqrt(1 - rho^2) xi_k (xi_k standard
+//                  normal; an AR(1) process of which only the direction is used), a walk that
+//                  loads on for about 1 / (1 - rho) steps before it turns, as a point under a
+//                  rolling wheel does; rho = 0 is the uncorrelated walk, draw for draw.
 // A step the model refuses (or a stress it cannot hold) ends the history there with
 // stopped_reason set, not an exception: a random walk may wander where a point fails.
 #pragma once
@@ -47,9 +52,11 @@ struct LabPathSpec {
   int steps = 50;               // after settling
   int settle_steps = 5;         // isotropic stress-controlled steps to pressure_pa
   double walk_step_strain = 1e-3;  // random walk: norm of one step's strain increment
+  double walk_persistence = 0;     // random walk: rho in [0, 1), the steps' directions' correlation
   std::uint64_t seed = 1;          // random walk
   // Throws InputError naming field_prefix + the field: pressure > 0, max_strain in (0, 0.5],
-  // steps in [1, 100000], settle_steps in [1, 1000], walk step in (0, max_strain].
+  // steps in [1, 100000], settle_steps in [1, 1000], walk step in (0, max_strain],
+  // walk_persistence in [0, 1).
   void Validate(const std::string& field_prefix) const;
 };
 

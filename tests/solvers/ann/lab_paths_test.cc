@@ -174,6 +174,45 @@ TEST(LabPaths, ARandomWalkIsSeededAndStaysInItsEnvelope) {
   }
 }
 
+// The mean cosine between consecutive strain increments of a walk, after its settling.
+double MeanConsecutiveCosine(const StrainHistory& walk, std::size_t settle_steps) {
+  double sum = 0;
+  int pairs = 0;
+  for (std::size_t s = settle_steps + 1; s < walk.steps(); ++s) {
+    const Vector6 a = material::StrainToVoigt(StrainOf(walk.increments[s - 1]));
+    const Vector6 b = material::StrainToVoigt(StrainOf(walk.increments[s]));
+    sum += a.dot(b) / (a.norm() * b.norm());
+    ++pairs;
+  }
+  return sum / pairs;
+}
+
+TEST(LabPaths, APersistentWalkLoadsOnBeforeItTurnsAndStaysInItsEnvelope) {
+  const material::LinearElastic model(Elastic());
+  LabPathSpec spec;
+  spec.path = LabPath::kRandomWalk;
+  spec.max_strain = 0.05;  // room to walk on: few reflections
+  spec.steps = 400;
+  spec.seed = 7;
+  const StrainHistory fresh = RunLabPath(model, spec);
+  spec.walk_persistence = 0.9;
+  const StrainHistory persistent = RunLabPath(model, spec);
+  ASSERT_TRUE(persistent.stopped_reason.empty()) << persistent.stopped_reason;
+  // Uncorrelated directions: only the compressive drift (a twelfth of a step on each normal
+  // strain) correlates consecutive steps, by about 3 / 144. rho 0.9: about 0.9.
+  EXPECT_LT(std::abs(MeanConsecutiveCosine(fresh, 5)), 0.1);
+  EXPECT_GT(MeanConsecutiveCosine(persistent, 5), 0.7);
+
+  spec.max_strain = 0.004;  // reflected at the bounds as an uncorrelated walk is
+  const StrainHistory bounded = RunLabPath(model, spec);
+  Vector6 walked = Vector6::Zero(), largest = Vector6::Zero();
+  for (std::size_t s = 5; s < bounded.steps(); ++s) {
+    walked += material::StrainToVoigt(StrainOf(bounded.increments[s]));
+    largest = largest.cwiseMax(walked.cwiseAbs());
+  }
+  for (int c = 0; c < 6; ++c) EXPECT_LE(largest[c], 0.004 * (1 + 1e-3)) << c;
+}
+
 TEST(LabPaths, AStepTheDriverCannotHoldEndsTheHistoryWithItsReason) {
   material::DruckerPragerParams params;
   params.young_pa = 20e6;
@@ -214,6 +253,9 @@ TEST(LabPaths, BadSpecificationsAreRefusedByName) {
   spec = {};
   spec.walk_step_strain = 1.0;
   EXPECT_EQ(field_of(spec), "path.walk_step_strain");
+  spec = {};
+  spec.walk_persistence = 1.0;
+  EXPECT_EQ(field_of(spec), "path.walk_persistence");
   EXPECT_EQ(ParseLabPath("simple-shear", "path"), LabPath::kSimpleShear);
   for (LabPath path : AllLabPaths()) EXPECT_EQ(ParseLabPath(LabPathName(path), "p"), path);
   try {
