@@ -251,10 +251,11 @@ void Validate(const CommandLine& line, const std::string& model_directory,
   record.fe_de_preset = line.preset;
   const auto models = std::make_shared<tiers::ListedSurrogateModels>(
       std::vector<tiers::SurrogateModelRecord>{record});
-  const tiers::FeDeTier fe_de(tiers::FeDeOptions::Preset(line.preset));
+  const tiers::FeDeOptions fe_de_options = tiers::FeDeOptions::Preset(line.preset);
+  const tiers::FeDeTier fe_de(fe_de_options);
   for (double spread_scale : line.validate_spread_scales) {
     tiers::FeAnnOptions options;
-    options.fe_de = tiers::FeDeOptions::Preset(line.preset);
+    options.fe_de = fe_de_options;
     options.return_after_steps = line.return_after_steps;
     // 1: the model's own (0 in the options); the envelope's distance threshold stays the model's.
     options.spread_threshold = spread_scale == 1.0 ? 0.0 : spread_scale * model_spread_threshold;
