@@ -199,7 +199,7 @@ void SurrogateEnsemble::FitEnvelopeAndThresholds(const std::vector<StrainHistory
   for (const EnsembleAnswer& answer : Answer(inputs, false)) {
     largest_spread = std::max(largest_spread, answer.relative_spread);
   }
-  spread_threshold_ = std::max(3 * largest_spread, 1e-12);
+  spread_threshold_ = std::max(kSpreadThresholdFactor * largest_spread, 1e-12);
 }
 
 Matrix3 SurrogateEnsemble::Admissible(const Matrix3& stress_pa, bool* capped) const {

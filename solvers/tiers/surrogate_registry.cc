@@ -178,11 +178,7 @@ double WorstErrorBeyondFloor(const RegisteredSurrogate& model) {
   if (model.held_out.empty()) return model.worst_held_out_error;
   double worst = 0;
   for (const HeldOutResult& path : model.held_out) {
-    double floor = 0;
-    for (const PackingDifference& packing : path.packings) {
-      floor = std::max(floor, packing.difference);
-    }
-    worst = std::max(worst, path.replay_error - floor);
+    worst = std::max(worst, path.replay_error - PackingFloor(path.packings));
   }
   return worst;
 }

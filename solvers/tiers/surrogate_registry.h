@@ -47,10 +47,10 @@ struct RegisteredSurrogate : SurrogateModelRecord {
 };
 
 // How far a model's held-out errors lie beyond its RVE's own spread: over the held-out paths, the
-// largest of (error - the path's largest difference on another packing of the RVE), at least 0; a
-// path not run on other packings counts whole. A model whose every path is within its floor scores
-// 0: the held-out set cannot tell it from its RVE. A record without held-out paths: its worst
-// error.
+// largest of (error - the path's PackingFloor, the median of its differences on other packings of
+// the RVE), at least 0; a path not run on other packings counts whole. A model whose every path is
+// within its floor scores 0: the held-out set cannot tell it from its RVE. A record without
+// held-out paths: its worst error.
 double WorstErrorBeyondFloor(const RegisteredSurrogate& model);
 
 class SurrogateRegistry : public SurrogateModelSource {

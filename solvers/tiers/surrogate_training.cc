@@ -199,6 +199,16 @@ std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories) {
   return hex;
 }
 
+double PackingFloor(const std::vector<PackingDifference>& packings) {
+  if (packings.empty()) return 0;
+  std::vector<double> differences;
+  for (const PackingDifference& packing : packings) differences.push_back(packing.difference);
+  std::sort(differences.begin(), differences.end());
+  const std::size_t middle = differences.size() / 2;
+  return differences.size() % 2 == 1 ? differences[middle]
+                                     : 0.5 * (differences[middle - 1] + differences[middle]);
+}
+
 std::vector<ann::StrainHistory> EvenlySpread(const std::vector<ann::StrainHistory>& paths,
                                              int count, int offset) {
   Require(count >= 0, "count", "must be >= 0");

@@ -86,6 +86,13 @@ struct HeldOutResult {
   std::vector<PackingDifference> packings;  // empty: not measured
 };
 
+// The floor under a held-out error: the median of the path's differences on other packings (what
+// a typical other packing of the same soil is off by), 0 when none was measured. The median, not
+// the furthest: the furthest grows with every packing run (the walk at 3.5 kPa of the tiny RVE:
+// 12.8 % over packings 2-4, 27.2 % over 2-17, where the median is 15.1 %; solvers/ann/README.md,
+// "The RVE's own spread").
+double PackingFloor(const std::vector<PackingDifference>& packings);
+
 struct TrainedSurrogate {
   ann::SurrogateEnsemble ensemble;
   std::vector<ann::StrainHistory> training;

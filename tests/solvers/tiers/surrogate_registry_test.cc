@@ -134,7 +134,8 @@ TEST_F(SurrogateRegistryTest, BestJudgesAHeldOutErrorAgainstItsRvesOwnSpread) {
   };
   // No floor measured: the whole error (triaxial 0.0234375, rig point 0.046875).
   const RegisteredSurrogate plain = Record("sand-plain", "sand", 0.046875, 4000);
-  // The walk within the furthest of its other packings: the triaxial's error is what is left.
+  // The walk within the median of its other packings (0.128125): the triaxial's error is what is
+  // left.
   const RegisteredSurrogate floored = with_held_out(
       "sand-floored",
       {{"walk 3.5 kPa", 0.125, {{2, 0.1}, {3, 0.15625}}}, {"triaxial", 0.03125, {}}}, 3000);
@@ -148,6 +149,12 @@ TEST_F(SurrogateRegistryTest, BestJudgesAHeldOutErrorAgainstItsRvesOwnSpread) {
   EXPECT_EQ(WorstErrorBeyondFloor(floored), 0.03125);
   EXPECT_EQ(WorstErrorBeyondFloor(tied), 0.03125);
   EXPECT_EQ(WorstErrorBeyondFloor(beyond), 0.0625);
+  // Within the furthest packing but beyond the median: judged by the median (0.09375).
+  const RegisteredSurrogate past_median = with_held_out(
+      "sand-past-median", {{"walk 3.5 kPa", 0.125, {{2, 0.5}, {3, 0.0625}, {4, 0.09375}}}}, 500);
+  EXPECT_EQ(WorstErrorBeyondFloor(past_median), 0.03125);
+  EXPECT_EQ(PackingFloor({{2, 0.5}, {3, 0.0625}, {4, 0.09375}, {5, 0.125}}), 0.109375);
+  EXPECT_EQ(PackingFloor({}), 0);
   for (const RegisteredSurrogate& model : {plain, floored, beyond}) {
     registry.Register(model, Ensemble());
   }
