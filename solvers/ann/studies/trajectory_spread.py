@@ -182,8 +182,8 @@ def main():
     for label, error in (('shared', shared_error), ('trajectories', own_error)):
         relative = 100 * error / path_size
         print(f'{label:13s} mean |error| {error.mean() / 1e3:.2f} kPa '
-              f'(sum {error.sum() / 1e3:.0f}), worst {error.max() / 1e3:.2f} kPa; relative median {np.median(relative):.1f} %, '
-              f'loaded half median '
+              f'(sum {error.sum() / 1e3:.0f}), worst {error.max() / 1e3:.2f} kPa; '
+              f'relative median {np.median(relative):.1f} %, loaded half median '
               f'{np.median(relative[path_size >= np.median(path_size)]):.1f} %')
     order = np.argsort(-shared_error)
     print('share of the shared replay\'s summed error on the paths ranked worst by '
