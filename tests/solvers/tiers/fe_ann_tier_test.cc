@@ -84,6 +84,18 @@ TrainedSurrogate TrainOnTheSoilsRve(const SurrogateRecipe& recipe) {
   return TrainSurrogateOnRve(soil, TinyFeDeOptions(), recipe);
 }
 
+// `ensemble` saved in `directory` and listed as the soil's one model of the tiny configuration.
+std::shared_ptr<const SurrogateModelSource> SavedAsTheOnlyModel(
+    const ann::SurrogateEnsemble& ensemble, const std::string& directory, const std::string& id) {
+  ensemble.Save(directory + "/model");
+  SurrogateModelRecord record;
+  record.id = id;
+  record.directory = directory + "/model";
+  record.soil_parameters = SoilText();
+  record.fe_de_preset = "tiny";
+  return std::make_shared<ListedSurrogateModels>(std::vector<SurrogateModelRecord>{record});
+}
+
 // One model and one fe-de curve for the whole suite. The model carries the RVE's coordination
 // number (stress_surrogate.h): the same recipe's network carrying nothing was 3.9 % of W off
 // fe-de's curve below, and 8.9 % of rW on the scaled tyre (solvers/ann/README.md, "Carrying the
@@ -103,14 +115,8 @@ class FeAnnTierTest : public ::testing::Test {
       std::cout << " " << result.path << " " << 100 * result.replay_error << " %;";
     }
     std::cout << "\n";
-    trained.ensemble.Save(*directory_ + "/model");
-    SurrogateModelRecord record;
-    record.id = "test-model";
-    record.directory = *directory_ + "/model";
-    record.soil_parameters = SoilText();
-    record.fe_de_preset = "tiny";
     models_ = new std::shared_ptr<const SurrogateModelSource>(
-        std::make_shared<ListedSurrogateModels>(std::vector<SurrogateModelRecord>{record}));
+        SavedAsTheOnlyModel(trained.ensemble, *directory_, "test-model"));
 
     const auto start = std::chrono::steady_clock::now();
     fe_de_ = new FeDeRunReport(FeDeTier(TinyFeDeOptions()).Run(Request(), {}));
@@ -208,16 +214,9 @@ TEST(SurrogateOnRve, OneModelMeetsTheHeldOutPathsAndTheCurve) {
 
   char directory[] = "/tmp/gonogo_fe_ann_one_XXXXXX";
   ASSERT_NE(mkdtemp(directory), nullptr);
-  trained.ensemble.Save(std::string(directory) + "/model");
-  SurrogateModelRecord record;
-  record.id = "one-model";
-  record.directory = std::string(directory) + "/model";
-  record.soil_parameters = SoilText();
-  record.fe_de_preset = "tiny";
   FeAnnOptions options;
   options.fe_de = TinyFeDeOptions();
-  const FeAnnTier tier(
-      options, std::make_shared<ListedSurrogateModels>(std::vector<SurrogateModelRecord>{record}));
+  const FeAnnTier tier(options, SavedAsTheOnlyModel(trained.ensemble, directory, "one-model"));
   for (const double load_n : {1000.0, 1500.0}) {
     TractionRequest request = Request();
     request.wheel_load_n = load_n;
