@@ -57,8 +57,16 @@ void PrintModel(const v1::SurrogateModel& m) {
         [](const auto& a, const auto& b) { return a.difference() < b.difference(); });
     std::cout << (h.packings_size() == 1 ? " (another packing " : " (other packings ")
               << Percent(least->difference());
-    if (h.packings_size() > 1) std::cout << " to " << Percent(most->difference());
+    if (h.packings_size() > 1) {
+      std::cout << " to " << Percent(most->difference()) << ", median " << Percent(h.floor());
+    }
     std::cout << ")";
+  }
+  if (std::any_of(m.held_out().begin(), m.held_out().end(),
+                  [](const auto& h) { return !h.packings().empty(); })) {
+    // What the server ranks a soil's models by (its default: the least).
+    std::cout << "\n  beyond the floors: " << Percent(m.worst_error_beyond_floor())
+              << " (a path without packings counts whole)";
   }
   std::cout << "\n  made by:   gonogo " << m.code_version() << ", unix ms " << m.created_unix_ms()
             << "\n";
@@ -260,11 +268,13 @@ Command AddTrainCommand(CLI::App& parent) {
            "model's envelope, the paths their RVEs took), their steps carrying this share of the "
            "loss, in [0, 0.99] [default: 0, left out]")
       ->type_name("F");
-  train->add_option_function<uint32_t>(
-           "--floor-packings", [&r](uint32_t v) { r.set_floor_packings(v); },
-           "also run each held-out laboratory path on this many other packings of the soil's "
-           "RVE; the model's record gives their differences from its own packing, the floor "
-           "under its held-out errors, at most 8 [default: 0, none]")
+  train
+      ->add_option_function<uint32_t>(
+          "--floor-packings", [&r](uint32_t v) { r.set_floor_packings(v); },
+          "also run each held-out path (a rig path replayed from its initial stress) on this "
+          "many other packings of the soil's RVE; the model's record gives their differences "
+          "from its own packing, whose median is the floor under its held-out error, at most 16 "
+          "[default: 0, none]")
       ->type_name("N");
   train->add_option_function<std::string>(
            "--name", [&r](const std::string& v) { r.set_name(v); }, "shown in job lists")

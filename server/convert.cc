@@ -32,8 +32,10 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
       p->set_packing_seed(packing.packing_seed);
       p->set_difference(packing.difference);
     }
+    e->set_floor(tiers::PackingFloor(h.packings));
   }
   out.set_worst_held_out_error(m.worst_held_out_error);
+  out.set_worst_error_beyond_floor(tiers::WorstErrorBeyondFloor(m));
   out.set_training_seconds(m.training_seconds);
   out.set_from_model(m.from_model);
   out.set_code_version(m.code_version);

@@ -202,9 +202,9 @@ std::string HistoryKey(const std::string& soil_parameters, const std::string& pr
          RecordedSuffix(recorded);
 }
 
-// How many other packings each held-out laboratory path also runs on (the floor under its error).
+// How many other packings each held-out path also runs on (the floor under its error).
 int FloorPackingsOf(const v1::TrainSurrogateRequest& request) {
-  Require(request.floor_packings() <= 8, "floor_packings", "must be at most 8 (0: none)");
+  Require(request.floor_packings() <= 16, "floor_packings", "must be at most 16 (0: none)");
   return static_cast<int>(request.floor_packings());
 }
 
@@ -294,6 +294,9 @@ struct PlannedPath {
   // place in the plan of the path it is the floor of; 0 and none for every other path.
   unsigned packing_seed = 0;
   size_t floor_of = 0;
+  // A held-out rig path on another packing: its task replays the rig's path (tiers::ReplayedOnRve),
+  // so it runs once the rig run has made that path.
+  bool replays_rig_path = false;
 };
 
 // The k-th kept path of a rig run (training or held out), by what the run and the choice were.
@@ -445,8 +448,6 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
         planned.push_back(std::move(other));
       }
     }
-    const size_t floor_paths = static_cast<size_t>(std::count_if(
-        planned.begin(), planned.end(), [](const PlannedPath& p) { return p.packing_seed > 0; }));
     // Seed 000's step 2: the kept paths of an fe-de rig run's points, after the lab paths.
     const RigRecipe rig = RigRecipeOf(request);
     std::vector<size_t> rig_paths;  // their places in `planned`
@@ -466,7 +467,24 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
           planned.push_back(std::move(path));
         }
       }
+      // Their floors: each held-out rig path replayed on the other packings, as the lab paths.
+      for (size_t k = 0, planned_paths = planned.size(); k < planned_paths; ++k) {
+        if (!planned[k].from_rig || planned[k].role != cache::kHeldOutRole) continue;
+        for (int n = 1; n <= floor_packings; ++n) {
+          PlannedPath other;
+          other.role = cache::kHeldOutRole;
+          other.packing_seed = own_packing + static_cast<unsigned>(n);
+          other.floor_of = k;
+          other.replays_rig_path = true;
+          other.path.name =
+              planned[k].path.name + " on packing " + std::to_string(other.packing_seed);
+          other.key = planned[k].key + ";packing=" + std::to_string(other.packing_seed);
+          planned.push_back(std::move(other));
+        }
+      }
     }
+    const size_t floor_paths = static_cast<size_t>(std::count_if(
+        planned.begin(), planned.end(), [](const PlannedPath& p) { return p.packing_seed > 0; }));
     cache::DatasetStore store(db_);
     std::vector<TaskSpec> path_tasks;
     std::vector<size_t> task_path;  // the planned path of each task (planned.size(): the rig run)
@@ -481,6 +499,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
         rig_missing = true;
         continue;
       }
+      if (planned[k].replays_rig_path) continue;  // after the rig run (below)
       v1::TrainingWork work;
       *work.mutable_rve_path() = ToProto(planned[k].path.spec);
       work.mutable_rve_path()->set_soil_parameters(soil_text);
@@ -544,9 +563,10 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       if (store.Put(row)) ++done;
     };
     const auto generation_start = std::chrono::steady_clock::now();
-    const TaskResult paths_outcome = RunTrainingTasks(
-        resolver_, std::move(path_tasks), stop, [&](size_t index, const TaskResult& result) {
-          if (task_path[index] == planned.size()) {
+    // Stores the answer of the task that made planned path k (planned.size(): the rig run).
+    const auto keep_answer =
+        [&](size_t k, const TaskResult& result) {
+          if (k == planned.size()) {
             v1::RigPathsOutput output;
             Require(output.ParseFromString(result.training_output), "training.rig_paths",
                     "the rig run's answer is unreadable");
@@ -565,16 +585,47 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
             spdlog::info("job {}: rig run at {} N ({} elements, {} FE steps) in {:.1f} s on {}",
                          id, rig.load_n, output.elements(), output.fe_steps(),
                          result.compute_seconds, result.computed_by);
+          } else if (planned[k].replays_rig_path) {
+            keep(planned[k], result.training_output, "rig-point", 0, result);
           } else {
-            const PlannedPath& path = planned[task_path[index]];
+            const PlannedPath& path = planned[k];
             keep(path, result.training_output, ann::LabPathName(path.path.spec.path),
                  static_cast<int64_t>(path.path.spec.seed), result);
           }
           status.set_tasks_done(static_cast<uint32_t>(done));
           report(0.8 * done / planned.size(), paths_message(), true);
-        });
+        };
+    const TaskResult paths_outcome = RunTrainingTasks(
+        resolver_, std::move(path_tasks), stop,
+        [&](size_t index, const TaskResult& result) { keep_answer(task_path[index], result); });
     if (paths_outcome.cancelled) return end_stopped();
     if (!paths_outcome.ok) return end_failed(paths_outcome, "an RVE strain path or the rig run");
+    // The held-out rig paths' floors, now that the rig's paths are in the dataset.
+    std::vector<TaskSpec> replay_tasks;
+    std::vector<size_t> replay_path;  // the planned path of each replay task
+    for (size_t k = 0; k < planned.size(); ++k) {
+      if (!planned[k].replays_rig_path || store.Has(planned[k].key)) continue;
+      const std::optional<cache::StoredHistory> rig_path =
+          store.Find(planned[planned[k].floor_of].key);
+      Require(rig_path.has_value(), "dataset",
+              "history of '" + planned[planned[k].floor_of].path.name + "' is missing");
+      v1::TrainingWork work;
+      v1::ReplayPathWork* replay = work.mutable_replay_path();
+      replay->set_soil_parameters(soil_text);
+      replay->set_fe_de_preset(preset);
+      replay->set_packing_seed(planned[k].packing_seed);
+      replay->set_history(rig_path->history);
+      for (const std::string& name : recorded) replay->add_recorded_variables(name);
+      replay_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
+      replay_path.push_back(k);
+    }
+    const TaskResult replays_outcome = RunTrainingTasks(
+        resolver_, std::move(replay_tasks), stop,
+        [&](size_t index, const TaskResult& result) { keep_answer(replay_path[index], result); });
+    if (replays_outcome.cancelled) return end_stopped();
+    if (!replays_outcome.ok) {
+      return end_failed(replays_outcome, "a held-out rig path on another packing");
+    }
     const double generation_seconds = Seconds(generation_start);
 
     std::vector<ann::StrainHistory> training, held_out;
@@ -721,7 +772,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
                  "members in {:.1f} s; worst held-out error {:.2f} %)",
                  id, registered.id, planned.size(), generation_seconds, stored, members,
                  training_seconds, 100 * registered.worst_held_out_error);
-    char worst_text[64];
+    char worst_text[128];
     std::snprintf(worst_text, sizeof worst_text, "%.2f %%", 100 * registered.worst_held_out_error);
     std::string message = "done: model " + registered.id + ", worst held-out error " + worst_text;
     if (worst != record.held_out.end() && !worst->packings.empty()) {
@@ -733,10 +784,16 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
         std::snprintf(worst_text, sizeof worst_text, "another packing of the RVE %.2f %%",
                       100 * least->difference);
       } else {
-        std::snprintf(worst_text, sizeof worst_text, "other packings of the RVE %.2f to %.2f %%",
-                      100 * least->difference, 100 * most->difference);
+        std::snprintf(worst_text, sizeof worst_text,
+                      "other packings of the RVE %.2f to %.2f %%, median %.2f %%",
+                      100 * least->difference, 100 * most->difference,
+                      100 * tiers::PackingFloor(worst->packings));
       }
       message += " (" + worst->path + "; " + worst_text + ")";
+      // What the registry ranks by (the soil's default model: the least).
+      std::snprintf(worst_text, sizeof worst_text, "%.2f %%",
+                    100 * tiers::WorstErrorBeyondFloor(registered));
+      message += ", beyond the floors " + std::string(worst_text);
     }
     Finish(id, cache::JobState::kDone, message, json, {"model.json"});
   } catch (const std::exception& e) {

@@ -106,6 +106,21 @@ std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& cont
   return output.SerializeAsString();
 }
 
+std::string RunReplayPath(const v1::ReplayPathWork& work, const ComputeContext& context) {
+  const SoilParameters soil =
+      SoilOf(work.soil_parameters(), "training.replay_path.soil_parameters");
+  tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
+  if (work.packing_seed() > 0) fe_de.numerics.seed = work.packing_seed();
+  const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
+      soil, fe_de.numerics, "training.replay_path.soil_parameters"));
+  if (context.Cancelled()) throw CancelledError();
+  const ann::InternalVariables recorded =
+      tiers::RveVariables({work.recorded_variables().begin(), work.recorded_variables().end()},
+                          "training.replay_path.recorded_variables");
+  return ann::SerializeHistory(
+      tiers::ReplayedOnRve(rve, ann::ParseHistory(work.history()), recorded));
+}
+
 }  // namespace
 
 int RigHeldOutOffset(int paths, int training_points) {
@@ -120,6 +135,8 @@ std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& 
       return TrainMember(work.train_member(), context);
     case v1::TrainingWork::kRigPaths:
       return RunRigPaths(work.rig_paths(), context);
+    case v1::TrainingWork::kReplayPath:
+      return RunReplayPath(work.replay_path(), context);
     default:
       throw InputError("training", "names no work");
   }

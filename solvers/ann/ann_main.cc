@@ -296,7 +296,8 @@ struct Study {
   SoilParameters soil;
   std::vector<StrainHistory> training, held_out;
   std::vector<std::string> held_out_names;
-  // Of each held-out path, its differences on other packings (--packing-seeds; rig paths: none).
+  // Of each held-out path, its differences on other packings (--packing-seeds; a rig path
+  // replayed from its initial stress, tiers::ReplayedOnRve).
   std::vector<std::vector<tiers::PackingDifference>> held_out_packings;
   std::map<double, FeDeReference> references;  // fe-de curves by load
   std::string data_hash;                       // of `training` (HistoriesHash)
@@ -553,7 +554,27 @@ int Run(const CommandLine& line) {
     for (std::size_t k = 0; k < rig_checks.size(); ++k) {
       held_out_all.push_back(rig_checks[k]);
       held_out_names.push_back("rig point " + std::to_string(k + 1));
-      held_out_packings.emplace_back();
+      // Its floor: the path replayed from its initial stress on each other packing.
+      std::vector<tiers::PackingDifference> floors;
+      for (unsigned seed : line.packing_seeds) {
+        dem::rve::RveNumerics numerics = preset.numerics;
+        numerics.seed = seed;
+        const StrainHistory other =
+            tiers::ReplayedOnRve(dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
+                                     entry->parameters, numerics, "soil")),
+                                 rig_checks[k]);
+        floors.push_back({seed, HistoryDifference(other, rig_checks[k])});
+      }
+      if (!floors.empty()) {
+        std::printf("# %s on the other packings: median %.2f %% (", held_out_names.back().c_str(),
+                    100 * tiers::PackingFloor(floors));
+        for (const tiers::PackingDifference& floor : floors) {
+          std::printf("%s%u %.2f %%", &floor == &floors.front() ? "" : ", ", floor.packing_seed,
+                      100 * floor.difference);
+        }
+        std::printf(")\n");
+      }
+      held_out_packings.push_back(std::move(floors));
     }
     std::printf("# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
                 "paths recorded, %zu in training, %zu held out\n",
@@ -693,7 +714,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--packing-seeds", line.packing_seeds,
                  "also run the held-out paths on the soil's RVE packed from these seeds (the "
-                 "study's packing is the preset's, seed 1) and print their stresses' difference "
+                 "study's packing is the preset's, seed 1; a held-out rig path replayed from its "
+                 "initial stress) and print their stresses' difference "
                  "from the study's packing's, measured as a replay's error: the RVE's own spread, "
                  "the floor under a held-out error; with --register, in the model's record")
       ->check(CLI::PositiveNumber);

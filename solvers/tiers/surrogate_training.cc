@@ -169,6 +169,33 @@ RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& requ
   return recorded;
 }
 
+ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rve,
+                                 const ann::StrainHistory& path,
+                                 const ann::InternalVariables& internal) {
+  Require(path.steps() > 0, "path", "has no steps to replay");
+  // Tension positive: the mean compressive stress the point started from.
+  const double initial_mean_pa = -path.initial_stress_pa.trace() / 3;
+  Require(initial_mean_pa > 0, "path", "starts from a mean stress that is not compressive");
+  dem::rve::Rve settled = rve->initial();
+  settled.SettleIsotropic(initial_mean_pa);
+  const ann::PathRecorder recorder(rve, internal);
+  std::unique_ptr<material::MaterialState> state = recorder.RestoreState(settled.Save());
+  std::string stopped_reason;
+  for (const material::Matrix3& increment : path.increments) {
+    std::vector<material::PointResponse> response =
+        recorder.Update({{increment, state.get()}}, false);
+    if (response.front().status != material::UpdateStatus::kOk) {
+      stopped_reason = response.front().reason;
+      break;
+    }
+    state = std::move(response.front().state);
+  }
+  std::vector<ann::StrainHistory> replayed = recorder.Histories();
+  Require(replayed.size() == 1, "path", "the RVE took none of its increments: " + stopped_reason);
+  replayed.front().stopped_reason = stopped_reason;
+  return std::move(replayed.front());
+}
+
 CurveDifference WorstDifference(const TractionCurve& a, const TractionCurve& b,
                                 const TractionRequest& request) {
   const double load_n = request.wheel_load_n;

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -116,6 +117,18 @@ struct RecordedRigRun {
 RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& request,
                               const ComputeContext& context = {},
                               const ann::InternalVariables& internal = {});
+
+// A recorded point's path (a rig point's, RecordRigPaths) taken again by a fresh point of `rve`:
+// its template settled isotropically at the path's initial mean stress, as the fe-de bin settles
+// each point at the stress of its depth (FeDeOptions::min_initial_pressure_pa), then the path's
+// displacement-gradient increments, one update each, recorded as RecordRigPaths records (with
+// `internal`). On another packing of the same soil (RveNumerics::seed), its difference from the
+// path (ann::HistoryDifference) is that path's floor, as a laboratory path's is. The replay stops
+// at the first increment the RVE refuses (stopped_reason). Throws InputError("path", ...) for a
+// path without steps or whose initial mean stress is not compressive.
+ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rve,
+                                 const ann::StrainHistory& path,
+                                 const ann::InternalVariables& internal = {});
 
 // The largest differences between two curves of the same request over their common slips: drawbar
 // pull over the wheel load W, torque over r W, sinkage over r (r = d / 2): the measures of

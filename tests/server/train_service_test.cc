@@ -241,9 +241,13 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   // The packings answer a 100-grain RVE's triaxial far apart (solvers/ann/README.md: 20-70 %).
   ASSERT_TRUE(std::regex_search(
       floor_held_out, match,
-      std::regex("triaxial [0-9.]+ kPa [0-9.]+ % \\(other packings ([0-9.]+) % to ([0-9.]+) %\\)")))
+      std::regex("triaxial [0-9.]+ kPa [0-9.]+ % \\(other packings ([0-9.]+) % to ([0-9.]+) %, "
+                 "median ([0-9.]+) %\\)")))
       << floor_held_out;
   EXPECT_GT(std::stod(match[1]), 1.0) << floor_held_out;
+  // Of two packings, the median is their mean (to the printed digit).
+  EXPECT_NEAR(std::stod(match[3]), 0.5 * (std::stod(match[1]) + std::stod(match[2])), 0.051)
+      << floor_held_out;
   EXPECT_NE(floor.out.find("other packings of the RVE "), std::string::npos)
       << "the job's last word names the worst path's floor:\n"
       << floor.out;
@@ -271,6 +275,27 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_EQ(CountOccurrences(floor_index, " on packing 2,held-out,"), 7u) << floor_index;
   EXPECT_EQ(CountOccurrences(floor_index, " on packing 3,held-out,"), 7u) << floor_index;
 
+  // A held-out rig path's floor: the path replayed from its initial stress on the other packing
+  // (the two held-out rig paths' replays new; the 40 other paths from the dataset). The job's last
+  // word and the record give how far the model lies beyond the floors, what the registry ranks by.
+  const CliRun rig_floor =
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe +
+                                    " --hidden 16x16 --rig-load-n 1000 --rig-points 4 "
+                                    "--floor-packings 1");
+  ASSERT_EQ(rig_floor.exit_code, 0) << rig_floor.out;
+  EXPECT_NE(rig_floor.out.find("tasks 45/45  cache hits 40"), std::string::npos) << rig_floor.out;
+  const std::string rig_floor_held_out = LineAfter(rig_floor.out, "held out:");
+  EXPECT_EQ(CountOccurrences(rig_floor_held_out, "(another packing "), 9u) << rig_floor.out;
+  ASSERT_TRUE(
+      std::regex_search(rig_floor_held_out, match,
+                        std::regex("; rig point 1 [0-9.]+ % \\(another packing ([0-9.]+) %")))
+      << rig_floor_held_out;
+  EXPECT_GT(std::stod(match[1]), 0.0) << "another packing answers the rig path differently";
+  EXPECT_NE(rig_floor.out.find("beyond the floors: "), std::string::npos) << rig_floor.out;
+  EXPECT_NE(rig_floor.out.find(", beyond the floors "), std::string::npos)
+      << "the job's last word:\n"
+      << rig_floor.out;
+
   // Refused by field, before anything runs.
   const std::vector<std::pair<std::string, std::string>> refusals = {
       {"train --soil no-such-soil", "soil_name: no dem-hertz-mindlin soil 'no-such-soil'"},
@@ -281,7 +306,8 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       {"train --soil seed000_sand_rve100 --pressures-kpa 5 2", "pressures_kpa: must be in"},
       {"train --soil seed000_sand_rve100 --members 2", "members: must lie in [3, 64]"},
       {"train --soil seed000_sand_rve100 --rig-points 4", "rig_load_n: is needed with"},
-      {"train --soil seed000_sand_rve100 --floor-packings 9", "floor_packings: must be at most 8"},
+      {"train --soil seed000_sand_rve100 --floor-packings 17",
+       "floor_packings: must be at most 16"},
       {"train --soil seed000_sand_rve100 --rig-load-n 1000 --rig-width-m 0.6",
        "rig_width_m: must lie in (0, rig_diameter_m]"},
       {"dataset export no-such --out " + exported.string(), "NOT_FOUND: dataset_id"},
