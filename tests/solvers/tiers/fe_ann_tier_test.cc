@@ -147,7 +147,10 @@ std::shared_ptr<const SurrogateModelSource>* FeAnnTierTest::models_ = nullptr;
 FeDeRunReport* FeAnnTierTest::fe_de_ = nullptr;
 double FeAnnTierTest::fe_de_seconds_ = 0;
 
-// One model meets both of the measures: the held-out paths and the curve against fe-de.
+// One model meets both of the measures on the laboratory paths: the held-out paths and
+// the curve against fe-de. Not held here: its held-out paths of the rig's points, replayed
+// open-loop 7.4 and 42.6 % off where the RVE's other packings differ by 1.7 and 6.5 %
+// (solvers/ann/README.md, "One model for both").
 //
 // Held-out paths (ReplayError: the ensemble replays each path from its initial stress on its own
 // answers, admissible stresses included; the mean |sigma error| over the path's mean |sigma|): a
@@ -168,7 +171,7 @@ double FeAnnTierTest::fe_de_seconds_ = 0;
 // / 5.1 / 3.45 / 14.5 %; the curve 4.3 % of W and 4.65 % of rW at 1,000 N, 4.6 / 4.95 % at
 // 1,500 N. Training seeds 1 and 1-6 of the same recipe met the held-out side and missed the curve
 // by up to 1.1 points: the curve of a model is within a point or two of chance.
-TEST(SurrogateOnRve, OneModelMeetsTheHeldOutPathsAndTheCurve) {
+TEST(SurrogateOnRve, OneModelMeetsTheHeldOutLaboratoryPathsAndTheCurve) {
   const std::vector<std::string> carried = {"coordination_number"};
   SurrogateRecipe recipe = TinyRecipe(96, carried);
   recipe.architecture.hidden_widths = {128, 128};
