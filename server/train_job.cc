@@ -564,37 +564,36 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     };
     const auto generation_start = std::chrono::steady_clock::now();
     // Stores the answer of the task that made planned path k (planned.size(): the rig run).
-    const auto keep_answer =
-        [&](size_t k, const TaskResult& result) {
-          if (k == planned.size()) {
-            v1::RigPathsOutput output;
-            Require(output.ParseFromString(result.training_output), "training.rig_paths",
-                    "the rig run's answer is unreadable");
-            Require(output.training_size() == rig.training_points &&
-                        output.held_out_size() == rig.held_out_points,
-                    "training.rig_paths", "the rig run kept another number of paths");
-            // The kept paths in the order of `rig_paths`: training, then held out.
-            std::vector<const std::string*> kept;
-            for (const std::string& bytes : output.training()) kept.push_back(&bytes);
-            for (const std::string& bytes : output.held_out()) kept.push_back(&bytes);
-            TaskResult each = result;  // the run's seconds shared among its paths
-            each.compute_seconds = result.compute_seconds / static_cast<double>(kept.size());
-            for (size_t r = 0; r < rig_paths.size(); ++r) {
-              keep(planned[rig_paths[r]], *kept[r], "rig-point", 0, each);
-            }
-            spdlog::info("job {}: rig run at {} N ({} elements, {} FE steps) in {:.1f} s on {}",
-                         id, rig.load_n, output.elements(), output.fe_steps(),
-                         result.compute_seconds, result.computed_by);
-          } else if (planned[k].replays_rig_path) {
-            keep(planned[k], result.training_output, "rig-point", 0, result);
-          } else {
-            const PlannedPath& path = planned[k];
-            keep(path, result.training_output, ann::LabPathName(path.path.spec.path),
-                 static_cast<int64_t>(path.path.spec.seed), result);
-          }
-          status.set_tasks_done(static_cast<uint32_t>(done));
-          report(0.8 * done / planned.size(), paths_message(), true);
-        };
+    const auto keep_answer = [&](size_t k, const TaskResult& result) {
+      if (k == planned.size()) {
+        v1::RigPathsOutput output;
+        Require(output.ParseFromString(result.training_output), "training.rig_paths",
+                "the rig run's answer is unreadable");
+        Require(output.training_size() == rig.training_points &&
+                    output.held_out_size() == rig.held_out_points,
+                "training.rig_paths", "the rig run kept another number of paths");
+        // The kept paths in the order of `rig_paths`: training, then held out.
+        std::vector<const std::string*> kept;
+        for (const std::string& bytes : output.training()) kept.push_back(&bytes);
+        for (const std::string& bytes : output.held_out()) kept.push_back(&bytes);
+        TaskResult each = result;  // the run's seconds shared among its paths
+        each.compute_seconds = result.compute_seconds / static_cast<double>(kept.size());
+        for (size_t r = 0; r < rig_paths.size(); ++r) {
+          keep(planned[rig_paths[r]], *kept[r], "rig-point", 0, each);
+        }
+        spdlog::info("job {}: rig run at {} N ({} elements, {} FE steps) in {:.1f} s on {}", id,
+                     rig.load_n, output.elements(), output.fe_steps(), result.compute_seconds,
+                     result.computed_by);
+      } else if (planned[k].replays_rig_path) {
+        keep(planned[k], result.training_output, "rig-point", 0, result);
+      } else {
+        const PlannedPath& path = planned[k];
+        keep(path, result.training_output, ann::LabPathName(path.path.spec.path),
+             static_cast<int64_t>(path.path.spec.seed), result);
+      }
+      status.set_tasks_done(static_cast<uint32_t>(done));
+      report(0.8 * done / planned.size(), paths_message(), true);
+    };
     const TaskResult paths_outcome = RunTrainingTasks(
         resolver_, std::move(path_tasks), stop,
         [&](size_t index, const TaskResult& result) { keep_answer(task_path[index], result); });
@@ -603,18 +602,22 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     // The held-out rig paths' floors, now that the rig's paths are in the dataset.
     std::vector<TaskSpec> replay_tasks;
     std::vector<size_t> replay_path;  // the planned path of each replay task
+    std::map<size_t, std::string> rig_path_bytes;  // each replayed rig path, read once
     for (size_t k = 0; k < planned.size(); ++k) {
       if (!planned[k].replays_rig_path || store.Has(planned[k].key)) continue;
-      const std::optional<cache::StoredHistory> rig_path =
-          store.Find(planned[planned[k].floor_of].key);
-      Require(rig_path.has_value(), "dataset",
-              "history of '" + planned[planned[k].floor_of].path.name + "' is missing");
+      const size_t of = planned[k].floor_of;
+      if (!rig_path_bytes.count(of)) {
+        const std::optional<cache::StoredHistory> rig_path = store.Find(planned[of].key);
+        Require(rig_path.has_value(), "dataset",
+                "history of '" + planned[of].path.name + "' is missing");
+        rig_path_bytes[of] = rig_path->history;
+      }
       v1::TrainingWork work;
       v1::ReplayPathWork* replay = work.mutable_replay_path();
       replay->set_soil_parameters(soil_text);
       replay->set_fe_de_preset(preset);
       replay->set_packing_seed(planned[k].packing_seed);
-      replay->set_history(rig_path->history);
+      replay->set_history(rig_path_bytes[of]);
       for (const std::string& name : recorded) replay->add_recorded_variables(name);
       replay_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
       replay_path.push_back(k);

@@ -1,9 +1,10 @@
 #include "server/training_work.h"
 
 #include <algorithm>
+#include <memory>
 
-#include "solvers/ann/stress_surrogate.h"
 #include "solvers/ann/strain_history.h"
+#include "solvers/ann/stress_surrogate.h"
 #include "solvers/common/errors.h"
 #include "solvers/common/soil_model.h"
 #include "solvers/dem/rve/rve_material.h"
@@ -27,14 +28,23 @@ SoilParameters SoilOf(const std::string& canonical_text, const std::string& fiel
   return *soil;
 }
 
+// The soil's RVE (its canonical text; InputError(field, ...) when it is not one) at the
+// configuration's numerics, packed from `packing_seed` (0: the configuration's own). The template
+// is settled once per process, configuration and packing (SharedRveMaterial), then shared by
+// every path this rank runs.
+std::shared_ptr<const dem::rve::RveMaterial> RveOfPacking(const std::string& soil_parameters,
+                                                          const std::string& fe_de_preset,
+                                                          unsigned packing_seed,
+                                                          const std::string& field) {
+  tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(fe_de_preset);
+  if (packing_seed > 0) fe_de.numerics.seed = packing_seed;
+  return dem::rve::SharedRveMaterial(
+      dem::rve::RveMaterialParamsFromSoil(SoilOf(soil_parameters, field), fe_de.numerics, field));
+}
+
 std::string RunRvePath(const v1::RvePathWork& work, const ComputeContext& context) {
-  const SoilParameters soil = SoilOf(work.soil_parameters(), "training.rve_path.soil_parameters");
-  tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
-  if (work.packing_seed() > 0) fe_de.numerics.seed = work.packing_seed();
-  // The template is settled once per process, configuration and packing (SharedRveMaterial), then
-  // shared by every path this rank runs.
-  const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
-      soil, fe_de.numerics, "training.rve_path.soil_parameters"));
+  const auto rve = RveOfPacking(work.soil_parameters(), work.fe_de_preset(), work.packing_seed(),
+                                "training.rve_path.soil_parameters");
   if (context.Cancelled()) throw CancelledError();
   const ann::LabPathSpec spec = LabPathSpecOf(work);
   spec.Validate("training.rve_path.");
@@ -107,12 +117,8 @@ std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& cont
 }
 
 std::string RunReplayPath(const v1::ReplayPathWork& work, const ComputeContext& context) {
-  const SoilParameters soil =
-      SoilOf(work.soil_parameters(), "training.replay_path.soil_parameters");
-  tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(work.fe_de_preset());
-  if (work.packing_seed() > 0) fe_de.numerics.seed = work.packing_seed();
-  const auto rve = dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
-      soil, fe_de.numerics, "training.replay_path.soil_parameters"));
+  const auto rve = RveOfPacking(work.soil_parameters(), work.fe_de_preset(), work.packing_seed(),
+                                "training.replay_path.soil_parameters");
   if (context.Cancelled()) throw CancelledError();
   const ann::InternalVariables recorded =
       tiers::RveVariables({work.recorded_variables().begin(), work.recorded_variables().end()},

@@ -108,6 +108,16 @@ std::vector<StrainHistory> RunPaths(const material::ConstitutiveModel& rve,
   return histories;
 }
 
+// The soil's RVE at the preset's numerics, packed from `seed` (RveNumerics::seed); settled once
+// per process and packing (SharedRveMaterial).
+std::shared_ptr<const dem::rve::RveMaterial> PackedFrom(const SoilParameters& soil,
+                                                        const tiers::FeDeOptions& preset,
+                                                        unsigned seed) {
+  dem::rve::RveNumerics numerics = preset.numerics;
+  numerics.seed = seed;
+  return dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(soil, numerics, "soil"));
+}
+
 // The floor under a held-out error: the same held-out paths run on the soil's RVE packed from
 // other seeds (RveNumerics::seed), their stresses measured against the study's packing's as a
 // surrogate's replay is (HistoryDifference: sum |sigma_other - sigma| / sum |sigma| over the steps
@@ -122,11 +132,8 @@ std::vector<std::vector<tiers::PackingDifference>> PrintPackingSpread(
   for (const tiers::NamedLabPath& path : held_out_paths) std::printf("%s %%,", path.name.c_str());
   std::printf("generation_s\n");
   for (unsigned seed : line.packing_seeds) {
-    dem::rve::RveNumerics numerics = preset.numerics;
-    numerics.seed = seed;
     const auto start = std::chrono::steady_clock::now();
-    const auto other_rve =
-        dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(soil, numerics, "soil"));
+    const auto other_rve = PackedFrom(soil, preset, seed);
     const std::vector<StrainHistory> others =
         RunPaths(*other_rve, held_out_paths, line.threads, "other packing's held-out", {});
     std::printf("%u,", seed);
@@ -557,12 +564,8 @@ int Run(const CommandLine& line) {
       // Its floor: the path replayed from its initial stress on each other packing.
       std::vector<tiers::PackingDifference> floors;
       for (unsigned seed : line.packing_seeds) {
-        dem::rve::RveNumerics numerics = preset.numerics;
-        numerics.seed = seed;
         const StrainHistory other =
-            tiers::ReplayedOnRve(dem::rve::SharedRveMaterial(dem::rve::RveMaterialParamsFromSoil(
-                                     entry->parameters, numerics, "soil")),
-                                 rig_checks[k]);
+            tiers::ReplayedOnRve(PackedFrom(entry->parameters, preset, seed), rig_checks[k]);
         floors.push_back({seed, HistoryDifference(other, rig_checks[k])});
       }
       if (!floors.empty()) {
