@@ -74,6 +74,8 @@ struct CommandLine {
   int members = 3;
   int epochs = 300;
   double path_stress_weighting = 0;
+  int rollout_steps = 0;  // TrainingOptions::rollout_steps
+  double rollout_weight = 1;
   double walk_share = 0;  // > 0: the random walks' share of the loss
   double walk_persistence = 0;  // the training walks' (ann::LabPathSpec::walk_persistence)
   std::uint64_t training_seed = 1;
@@ -205,6 +207,8 @@ TrainingOptions StudyTraining(const CommandLine& line, const std::vector<double>
   options.epochs = line.epochs;
   options.seed = line.training_seed;
   options.path_stress_weighting = line.path_stress_weighting;
+  options.rollout_steps = line.rollout_steps;
+  options.rollout_weight = line.rollout_weight;
   options.history_weights = history_weights;
   return options;
 }
@@ -317,7 +321,15 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                     const std::string& name, int epochs, const std::vector<TrainingReport>& reports,
                     double train_s, const std::string& from_model) {
   double final_loss = 0;
-  for (const TrainingReport& report : reports) final_loss += report.final_loss / reports.size();
+  double final_rollout_loss = 0;
+  for (const TrainingReport& report : reports) {
+    final_loss += report.final_loss / reports.size();
+    final_rollout_loss += report.final_rollout_loss / reports.size();
+  }
+  if (line.rollout_steps > 0) {
+    std::fprintf(stderr, "%s: the rollout term over %d steps, last epoch, members' mean: %.3g\n",
+                 name.c_str(), line.rollout_steps, final_rollout_loss);
+  }
   std::printf("%s,%zu,%d,%lld,%.1f,%.3g,", name.c_str(), ensemble.size(), epochs,
               static_cast<long long>(reports.front().samples), train_s, final_loss);
   std::vector<double> held_out_errors;  // replayed once: the row and the record both show them
@@ -774,6 +786,15 @@ int main(int argc, char** argv) {
                  "each training step's squared error weighed by its path's mean |sigma| to the "
                  "power -2x: 0 every step alike, 1 relative to the path's stress (MLPs)")
       ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--rollout-steps", line.rollout_steps,
+                 "a rollout term in the loss: windows of this many steps replayed on the "
+                 "network's own stresses, their error relative to the path's stress (MLPs; 0: "
+                 "none)")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  app.add_option("--rollout-weight", line.rollout_weight, "the rollout term's weight in the loss")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--walk-share", line.walk_share,
                  "the random walks' share of the training loss (their steps weighed to give it); "

@@ -132,6 +132,28 @@ torch::Tensor StepWeights(const std::vector<double>& path_stress_pa,
   return weights / weights.mean();
 }
 
+// The map of a stress's Voigt components under the rotation R (sigma -> R sigma R^T), as a matrix.
+Eigen::Matrix<double, 6, 6> StressRotationMap(const Matrix3& rotation) {
+  Eigen::Matrix<double, 6, 6> map;
+  for (int j = 0; j < 6; ++j) {
+    const Matrix3 unit = material::VoigtToStress(Vector6::Unit(j));
+    map.col(j) = material::StressToVoigt(rotation * unit * rotation.transpose());
+  }
+  return map;
+}
+
+// What the rollout term of the loss (TrainingOptions::rollout_steps) replays windows with: per
+// sample, its step's stress rotation map, the recorded stress and carried variables after it,
+// and its path's mean |sigma|; and the first sample of every window of K steps in one history.
+struct RolloutData {
+  torch::Tensor rotation_maps;   // (N, 6, 6)
+  torch::Tensor stress_after;    // (N, 6), Pa
+  torch::Tensor carried_after;   // (N, V)
+  torch::Tensor path_stress_pa;  // (N, 1), at least 1 Pa
+  torch::Tensor window_starts;   // (W)
+  torch::Tensor window_weights;  // (W): 1 / its history's windows, so every history alike
+};
+
 // Column means and standard deviations; a constant column gets scale 1 (it carries nothing).
 std::pair<torch::Tensor, torch::Tensor> Standardisation(const torch::Tensor& values) {
   torch::Tensor mean = values.mean(0);
@@ -280,6 +302,12 @@ void TrainingOptions::Validate(const std::string& field_prefix) const {
   if (!(path_stress_weighting >= 0 && path_stress_weighting <= 1)) {
     throw InputError(field_prefix + "path_stress_weighting", "must be in [0, 1]");
   }
+  if (rollout_steps < 0 || rollout_steps > 1000) {
+    throw InputError(field_prefix + "rollout_steps", "must be in [0, 1000]");
+  }
+  if (!(rollout_weight >= 0 && std::isfinite(rollout_weight))) {
+    throw InputError(field_prefix + "rollout_weight", "must be finite and not negative");
+  }
   for (double weight : history_weights) {
     if (!(weight >= 0 && std::isfinite(weight))) {
       throw InputError(field_prefix + "history_weights", "must be finite and not negative");
@@ -363,6 +391,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   }
   std::vector<double> path_stress_pa;  // per step: its path's mean |sigma|
   std::vector<double> history_weight;   // per step: its history's weight
+  const int rollout_steps = options.rollout_steps;
+  std::vector<Eigen::Matrix<double, 6, 6>> rotation_maps;  // per step, for the rollout term
+  std::vector<std::int64_t> window_starts;
+  std::vector<double> window_weights;
   for (std::size_t h = 0; h < histories.size(); ++h) {
     const StrainHistory& history = histories[h];
     const std::vector<SurrogateInput> steps = InputsOf(history, carried);
@@ -376,6 +408,13 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     path_stress_pa.insert(path_stress_pa.end(), steps.size(), mean_stress);
     history_weight.insert(history_weight.end(), steps.size(),
                           options.history_weights.empty() ? 1.0 : options.history_weights[h]);
+    if (rollout_steps > 0 && steps.size() >= static_cast<std::size_t>(rollout_steps)) {
+      const std::size_t windows = steps.size() - rollout_steps + 1;
+      for (std::size_t s = 0; s < windows; ++s) {
+        window_starts.push_back(static_cast<std::int64_t>(inputs.size() + s));
+        window_weights.push_back(1.0 / static_cast<double>(windows));
+      }
+    }
     for (std::size_t s = 0; s < steps.size(); ++s) {
       const Matrix3 rotation = material::HughesWinget(history.increments[s]).rotation;
       const Matrix3 before = material::VoigtToStress(steps[s].stress_pa);
@@ -385,9 +424,14 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
           CarriedBefore(history, columns, s + 1) - steps[s].internal_variables;
       targets.push_back(std::move(target));
       inputs.push_back(steps[s]);
+      if (rollout_steps > 0) rotation_maps.push_back(StressRotationMap(rotation));
     }
   }
   if (inputs.empty()) throw InputError("histories", "no steps to train on");
+  if (rollout_steps > 0 && window_starts.empty()) {
+    throw InputError("training.rollout_steps",
+                     "every history is shorter than " + std::to_string(rollout_steps) + " steps");
+  }
   const torch::Tensor x = InputTensor(inputs);
   torch::Tensor y = torch::empty({static_cast<std::int64_t>(targets.size()), outputs},
                                  torch::kFloat64);
@@ -419,6 +463,28 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   const torch::Tensor xs_rest = (rest - in_mean) / in_scale;
 
   const torch::Tensor step_weights = StepWeights(path_stress_pa, history_weight, options);
+  const int carried_count = static_cast<int>(carried.size());
+  RolloutData rollout;
+  if (rollout_steps > 0) {
+    const auto count = static_cast<std::int64_t>(inputs.size());
+    rollout.rotation_maps = torch::empty({count, 6, 6}, torch::kFloat64);
+    rollout.path_stress_pa = torch::empty({count, 1}, torch::kFloat64);
+    double* maps = rollout.rotation_maps.data_ptr<double>();
+    double* scales = rollout.path_stress_pa.data_ptr<double>();
+    for (std::int64_t n = 0; n < count; ++n) {
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) maps[36 * n + 6 * r + c] = rotation_maps[n](r, c);
+      }
+      scales[n] = std::max(path_stress_pa[n], 1.0);
+    }
+    // The state after each step: the state before it plus the recorded change.
+    const torch::Tensor before = x.slice(1, 6, 12).unsqueeze(2);
+    rollout.stress_after = torch::bmm(rollout.rotation_maps, before).squeeze(2) + y.slice(1, 0, 6);
+    rollout.carried_after = x.slice(1, kInputs, kInputs + carried_count) +
+                            y.slice(1, kOutputs, kOutputs + carried_count);
+    rollout.window_starts = torch::tensor(window_starts, torch::kInt64);
+    rollout.window_weights = torch::tensor(window_weights, torch::kFloat64);
+  }
 
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
@@ -447,30 +513,87 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   const std::int64_t samples = xs.size(0);
   TrainingReport figures;
   figures.samples = samples;
+  // The rollout term: windows replayed from their first recorded state on the network's own
+  // answers, as ReplayError replays a path (the same objective update and carried variables).
+  const std::int64_t windows_per_batch =
+      std::max(1, options.batch_size / std::max(1, rollout_steps));
+  const auto rollout_loss = [&]() {
+    const torch::Tensor starts = rollout.window_starts.index_select(
+        0, torch::multinomial(rollout.window_weights, windows_per_batch, /*replacement=*/true));
+    const torch::Tensor first = x.index_select(0, starts);
+    torch::Tensor stress = first.slice(1, 6, 12);
+    torch::Tensor carried_now = first.slice(1, kInputs, kInputs + carried_count);
+    const torch::Tensor carried_scale = in_scale.slice(0, kInputs, kInputs + carried_count);
+    torch::Tensor squared_error_sum = torch::zeros({}, torch::kFloat64);
+    for (int k = 0; k < rollout_steps; ++k) {
+      const torch::Tensor step = starts + k;
+      const torch::Tensor recorded = x.index_select(0, step);
+      const torch::Tensor strain_increment = recorded.slice(1, 0, 6);
+      const torch::Tensor accumulated = recorded.slice(1, 12, kInputs);
+      const torch::Tensor state = torch::cat({stress, accumulated, carried_now}, 1);
+      torch::Tensor raw = torch::cat({strain_increment, state}, 1);
+      // Anchored: the answer at rest from the same forward pass, the two stacked.
+      if (architecture.anchored) {
+        raw = torch::cat({raw, torch::cat({torch::zeros_like(strain_increment), state}, 1)}, 0);
+      }
+      torch::Tensor answer = net->forward((raw - in_mean) / in_scale);
+      if (architecture.anchored) {
+        answer = answer.slice(0, 0, windows_per_batch) -
+                 answer.slice(0, windows_per_batch, 2 * windows_per_batch);
+      }
+      answer = answer * out_scale + out_mean;
+      stress =
+          torch::bmm(rollout.rotation_maps.index_select(0, step), stress.unsqueeze(2)).squeeze(2) +
+          answer.slice(1, 0, 6);
+      squared_error_sum =
+          squared_error_sum + ((stress - rollout.stress_after.index_select(0, step)) /
+                               rollout.path_stress_pa.index_select(0, step))
+                                  .pow(2)
+                                  .sum();
+      if (carried_count > 0) {
+        carried_now = carried_now + answer.slice(1, kOutputs, kOutputs + carried_count);
+        squared_error_sum =
+            squared_error_sum +
+            ((carried_now - rollout.carried_after.index_select(0, step)) / carried_scale)
+                .pow(2)
+                .sum();
+      }
+    }
+    return squared_error_sum /
+           static_cast<double>(windows_per_batch * rollout_steps * (kOutputs + carried_count));
+  };
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
     if (options.stop && options.stop()) throw CancelledError();
     HalveLearningRateAtMilestones(optimizer, epoch, options.epochs);
     const torch::Tensor order = torch::randperm(samples, torch::kInt64);
     double loss_sum = 0;
+    double rollout_sum = 0;
+    std::int64_t batches = 0;
     for (std::int64_t begin = 0; begin < samples; begin += options.batch_size) {
       const torch::Tensor batch =
           order.slice(0, begin, std::min<std::int64_t>(begin + options.batch_size, samples));
       optimizer.zero_grad();
       torch::Tensor predicted = net->forward(xs.index_select(0, batch));
       if (architecture.anchored) predicted = predicted - net->forward(xs_rest.index_select(0, batch));
-      const torch::Tensor loss =
-          step_weights.defined()
-              ? ((predicted - ys.index_select(0, batch)).pow(2) *
-                 step_weights.index_select(0, batch).unsqueeze(1))
-                    .mean()
-              : torch::mse_loss(predicted, ys.index_select(0, batch));
+      torch::Tensor loss = step_weights.defined()
+                               ? ((predicted - ys.index_select(0, batch)).pow(2) *
+                                  step_weights.index_select(0, batch).unsqueeze(1))
+                                     .mean()
+                               : torch::mse_loss(predicted, ys.index_select(0, batch));
+      loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
+      if (rollout_steps > 0) {
+        const torch::Tensor term = rollout_loss();
+        rollout_sum += term.item<double>();
+        ++batches;
+        loss = loss + options.rollout_weight * term;
+      }
       loss.backward();
       optimizer.step();
-      loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
     }
     const double mean_loss = loss_sum / static_cast<double>(samples);
     if (epoch == 0) figures.first_loss = mean_loss;
     figures.final_loss = mean_loss;
+    if (batches > 0) figures.final_rollout_loss = rollout_sum / static_cast<double>(batches);
   }
   std::vector<torch::Tensor> weights, biases;
   for (const torch::nn::Linear& layer : layers) {
@@ -651,6 +774,11 @@ RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<Strai
     throw InputError(options.history_weights.empty() ? "training.path_stress_weighting"
                                                      : "training.history_weights",
                      "the recurrent surrogate weighs every step alike (the weights are for MLPs)");
+  }
+  if (options.rollout_steps != 0) {
+    throw InputError("training.rollout_steps",
+                     "the recurrent surrogate is trained on whole histories already (the rollout "
+                     "term is for MLPs)");
   }
   const auto start = std::chrono::steady_clock::now();
   // Histories of equal length make one batch of sequences (time, batch, feature).

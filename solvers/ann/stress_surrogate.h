@@ -70,6 +70,18 @@ struct TrainingOptions {
   // empty: 1 each. E.g. to give the laboratory paths the share of the loss they would have beside
   // fewer random walks.
   std::vector<double> history_weights;
+  // A multi-step (rollout) term in the loss, 0: none. The held-out error replays a whole path on
+  // the network's own stresses, where one step's error feeds the next; a loss of single steps,
+  // each from the recorded stress, does not see how its errors compound. With K > 0, each batch
+  // also replays windows of K consecutive steps of the histories (batch_size / K windows, at
+  // least one) from their recorded first state on the network's own stress and carried
+  // variables, the stress objectively turned by each step's rotation as a point turns it, and
+  // adds rollout_weight times the mean squared stress error over the windows' steps, relative to
+  // the path's mean |sigma| (the held-out metric's scale; carried variables relative to their
+  // standard deviation). Windows are drawn so that every history weighs alike, as every held-out
+  // path counts alike, however long; histories shorter than K give none.
+  int rollout_steps = 0;
+  double rollout_weight = 1;
   // Asked before each epoch; true stops the training with CancelledError (a cancelled job).
   std::function<bool()> stop;
   void Validate(const std::string& field_prefix) const;
@@ -79,6 +91,7 @@ struct TrainingReport {
   std::int64_t samples = 0;
   double first_loss = 0;   // mean squared error of the standardised d_sigma, first epoch
   double final_loss = 0;   // last epoch
+  double final_rollout_loss = 0;  // last epoch's rollout term (TrainingOptions::rollout_steps)
   double seconds = 0;
 };
 

@@ -377,6 +377,16 @@ TEST(StressSurrogate, TrainingIsReproducibleAndRefusesNothingToLearn) {
   EXPECT_THROW(StressSurrogate::Train(paths, MlpArchitecture{}, options), InputError);
 }
 
+// The field of the InputError `train` throws, or "(accepted)".
+std::string RefusedField(const std::function<void()>& train) {
+  try {
+    train();
+  } catch (const InputError& e) {
+    return e.field();
+  }
+  return "(accepted)";
+}
+
 // TrainingOptions::history_weights and path_stress_weighting: the path the loss weighs more is
 // the path the network replays better, and weights that do not fit are refused by field.
 TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
@@ -413,12 +423,7 @@ TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
   EXPECT_LT(errors[3][0], errors[2][0]);
 
   const auto refused_field = [&](std::vector<double> weights, double path_stress_weighting) {
-    try {
-      trained(std::move(weights), path_stress_weighting);
-    } catch (const InputError& e) {
-      return e.field();
-    }
-    return std::string("(accepted)");
+    return RefusedField([&] { trained(std::move(weights), path_stress_weighting); });
   };
   EXPECT_EQ(refused_field({1}, 0), "training.history_weights");
   EXPECT_EQ(refused_field({1, -1}, 0), "training.history_weights");
@@ -426,12 +431,56 @@ TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
   EXPECT_EQ(refused_field({}, 1.5), "training.path_stress_weighting");
   TrainingOptions weighted = options;
   weighted.path_stress_weighting = 1;
-  try {
-    RecurrentStressSurrogate::Train(paths, 8, weighted);
-    ADD_FAILURE() << "the recurrent surrogate took loss weights it does not apply";
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.field(), "training.path_stress_weighting");
+  // The recurrent surrogate does not apply loss weights.
+  EXPECT_EQ(RefusedField([&] { RecurrentStressSurrogate::Train(paths, 8, weighted); }),
+            "training.path_stress_weighting");
+}
+
+// TrainingOptions::rollout_steps: with the rollout term the loss sees what a replay sees, the
+// network's own stresses fed back, so the same small network trained as long replays its
+// training paths closer than on single steps alone; options that do not fit are refused by field.
+TEST(StressSurrogate, TheRolloutTermReplaysThePathsCloser) {
+  const std::vector<StrainHistory> paths = {Path(LabPath::kTriaxial, 5e3, 0.02),
+                                            Path(LabPath::kSimpleShear, 80e3, 0.04),
+                                            Path(LabPath::kRandomWalk, 30e3, 0.004, 7)};
+  TrainingOptions options;
+  options.epochs = 80;
+  options.batch_size = 16;
+  const auto trained = [&](int rollout_steps, double rollout_weight, TrainingReport* report) {
+    TrainingOptions rolled = options;
+    rolled.rollout_steps = rollout_steps;
+    rolled.rollout_weight = rollout_weight;
+    return StressSurrogate::Train(paths, MlpArchitecture{{16}}, rolled, report);
+  };
+  TrainingReport single_report, rollout_report;
+  const StressSurrogate single = trained(0, 1, &single_report);
+  const StressSurrogate rolled = trained(10, 10, &rollout_report);
+  EXPECT_EQ(single_report.final_rollout_loss, 0);
+  EXPECT_GT(rollout_report.final_rollout_loss, 0);
+  double single_sum = 0, rolled_sum = 0;
+  const char* names[3] = {"triaxial 5 kPa", "simple shear 80 kPa", "walk 30 kPa"};
+  for (int k = 0; k < 3; ++k) {
+    const StrainHistory& path = paths[k];
+    const double single_error = ReplayError(single, path), rolled_error = ReplayError(rolled, path);
+    std::cout << "  " << names[k] << ": single steps " << 100 * single_error
+              << " %, with the rollout term " << 100 * rolled_error << " %\n";
+    single_sum += single_error;
+    rolled_sum += rolled_error;
   }
+  EXPECT_LT(rolled_sum, 0.8 * single_sum);
+
+  const auto refused_field = [&](int rollout_steps, double rollout_weight) {
+    return RefusedField([&] { trained(rollout_steps, rollout_weight, nullptr); });
+  };
+  EXPECT_EQ(refused_field(-1, 1), "training.rollout_steps");
+  EXPECT_EQ(refused_field(1001, 1), "training.rollout_steps");
+  EXPECT_EQ(refused_field(500, 1), "training.rollout_steps");  // longer than every path
+  EXPECT_EQ(refused_field(10, -1), "training.rollout_weight");
+  TrainingOptions rolled_options = options;
+  rolled_options.rollout_steps = 10;
+  // The recurrent surrogate is trained on whole histories; it takes no rollout term.
+  EXPECT_EQ(RefusedField([&] { RecurrentStressSurrogate::Train(paths, 8, rolled_options); }),
+            "training.rollout_steps");
 }
 
 // The GRU: trained on the same paths it learns (the loss falls tenfold), it steps a batch as it
