@@ -206,6 +206,12 @@ Command AddTrainCommand(CLI::App& parent) {
   train->add_flag_function(
       "--unanchored", [&r](int64_t) { r.set_unanchored(true); },
       "no anchoring at rest (d_sigma(0) not forced to 0)");
+  train
+      ->add_option_function<double>(
+          "--pressure-scaled", [&r](double v) { r.set_pressure_reference_pa(v); },
+          "the network sees the stress relative to max(p, 0) + this reference pressure and "
+          "answers d_sigma relative to it (solvers/ann/README.md) [default: 0, unscaled]")
+      ->type_name("PA");
   train->add_option_function<std::vector<std::string>>(
            "--carry",
            [&r](const std::vector<std::string>& names) {

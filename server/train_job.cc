@@ -100,6 +100,10 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   Require(!(fine_tuning && request.unanchored()), "unanchored",
           "a fine-tuned model keeps its base model's anchoring");
   recipe.architecture.anchored = !request.unanchored();
+  Require(!(fine_tuning && request.pressure_reference_pa() != 0), "pressure_reference_pa",
+          "a fine-tuned model keeps its base model's pressure scaling");
+  recipe.architecture.pressure_reference_pa = request.pressure_reference_pa();
+  recipe.architecture.Validate("");
   if (request.carried_variables_size() > 0) {
     Require(!fine_tuning, "carried_variables",
             "a fine-tuned model carries what its base model carries");
@@ -681,6 +685,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     member_work.set_batch_size(recipe.training.batch_size);
     member_work.set_learning_rate(recipe.training.learning_rate);
     member_work.set_anchored(recipe.architecture.anchored);
+    member_work.set_pressure_reference_pa(recipe.architecture.pressure_reference_pa);
     for (int width : recipe.architecture.hidden_widths) member_work.add_hidden_widths(width);
     for (const std::string& name : recipe.architecture.carried_variables) {
       member_work.add_carried_variables(name);

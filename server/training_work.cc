@@ -77,6 +77,7 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
     ann::MlpArchitecture architecture;
     architecture.hidden_widths.assign(work.hidden_widths().begin(), work.hidden_widths().end());
     architecture.anchored = work.anchored();
+    architecture.pressure_reference_pa = work.pressure_reference_pa();
     architecture.carried_variables.assign(work.carried_variables().begin(),
                                           work.carried_variables().end());
     architecture.Validate("training.train_member.");

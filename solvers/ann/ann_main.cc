@@ -54,6 +54,7 @@ struct CommandLine {
   int held_out_walks = tiers::SurrogateRecipe().held_out_walks;
   std::vector<double> pressures_kpa;  // empty: the recipe's
   bool unanchored = false;
+  double pressure_reference_pa = 0;  // MlpArchitecture::pressure_reference_pa
   double rig_load_n = 0;  // 0: no rig paths
   double rig_diameter_m = 0.5;
   double rig_width_m = 0.2;
@@ -658,6 +659,7 @@ int Run(const CommandLine& line) {
     }
     MlpArchitecture architecture = ParseArchitecture(text);
     architecture.anchored = !line.unanchored;
+    architecture.pressure_reference_pa = line.pressure_reference_pa;
     architecture.carried_variables = line.carried;
     TrainingOptions options = StudyTraining(line, history_weights);
     options.batch_size = 64;
@@ -700,6 +702,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--unanchored", line.unanchored,
                "MLPs without the at-rest anchor (d_sigma(0) = 0; stress_surrogate.h)");
+  app.add_option("--pressure-scaled", line.pressure_reference_pa,
+                 "MLPs that see the stress relative to s = max(p, 0) + this reference pressure "
+                 "(Pa) and answer d_sigma / s (stress_surrogate.h); 0: unscaled")
+      ->check(CLI::Range(0.0, 1e7))
+      ->capture_default_str();
   app.add_option("--rig-load-n", line.rig_load_n,
                  "record the paths of an fe-de rig run of the preset at this wheel load (N) and "
                  "train and check on them too (seed 000's step 2); 0: none")

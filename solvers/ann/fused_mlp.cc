@@ -27,10 +27,28 @@ Eigen::MatrixXd Standardised(const FusedMlp& mlp, Eigen::MatrixXd x) {
   return mlp.in_scale.cwiseInverse().asDiagonal() * x;
 }
 
+// The pressure-scaled features of raw inputs (stress_surrogate.h, MlpArchitecture::
+// pressure_reference_pa): the stress rows divided by each point's s, log(s / p_ref) appended;
+// `scale` receives s per point.
+Eigen::MatrixXd ScaledFeatures(const Eigen::MatrixXd& inputs, double reference_pa,
+                               Eigen::RowVectorXd* scale) {
+  *scale =
+      ((-inputs.middleRows(6, 3).colwise().sum() / 3).array().max(0.0) + reference_pa).matrix();
+  Eigen::MatrixXd features(inputs.rows() + 1, inputs.cols());
+  features.topRows(inputs.rows()) = inputs;
+  features.middleRows(6, 6) = inputs.middleRows(6, 6) * scale->cwiseInverse().asDiagonal();
+  features.bottomRows(1) = (scale->array() / reference_pa).log().matrix();
+  return features;
+}
+
 }  // namespace
 
-Eigen::MatrixXd FusedMlp::Evaluate(const Eigen::MatrixXd& inputs,
+Eigen::MatrixXd FusedMlp::Evaluate(const Eigen::MatrixXd& raw_inputs,
                                    std::vector<Voigt6x6>* tangents) const {
+  Eigen::RowVectorXd scale;
+  const bool scaled = pressure_reference_pa > 0;
+  const Eigen::MatrixXd inputs =
+      scaled ? ScaledFeatures(raw_inputs, pressure_reference_pa, &scale) : raw_inputs;
   std::vector<Eigen::MatrixXd> activations;
   Eigen::MatrixXd y =
       Forward(*this, Standardised(*this, inputs), tangents != nullptr ? &activations : nullptr);
@@ -43,6 +61,9 @@ Eigen::MatrixXd FusedMlp::Evaluate(const Eigen::MatrixXd& inputs,
     y = out_scale.asDiagonal() * y;
     y.colwise() += out_mean;
   }
+  // Scaled: the stress rows are d_sigma / s; s does not depend on d_eps, so the tangent is s
+  // times the network's.
+  if (scaled) y.topRows(6) = y.topRows(6) * scale.asDiagonal();
   if (tangents != nullptr) {
     const Eigen::Index points = inputs.cols();
     tangents->assign(static_cast<std::size_t>(points), Voigt6x6::Zero());
@@ -55,7 +76,8 @@ Eigen::MatrixXd FusedMlp::Evaluate(const Eigen::MatrixXd& inputs,
         g = weights[k + 1] * (slope.asDiagonal() * g);
       }
       // The stress rows only: a carried internal variable's increment is an output, not a stress.
-      (*tangents)[static_cast<std::size_t>(n)] = out_scale.head(6).asDiagonal() * g.topRows(6);
+      (*tangents)[static_cast<std::size_t>(n)] =
+          (scaled ? scale[n] : 1.0) * out_scale.head(6).asDiagonal() * g.topRows(6);
     }
   }
   return y;

@@ -25,11 +25,15 @@ struct FusedMlp {
   std::vector<Eigen::VectorXd> biases;
   Eigen::VectorXd in_mean, in_scale, out_mean, out_scale;
   bool anchored = true;
+  // MlpArchitecture::pressure_reference_pa: > 0, the network's inputs are the raw inputs' scaled
+  // features and its stress outputs (and their tangent) are multiplied back by each point's
+  // s = max(p_n, 0) + p_ref (stress_surrogate.h).
+  double pressure_reference_pa = 0;
 
-  // inputs: (18 + V) x N (one point per column, V carried internal variables last); returns
+  // raw_inputs: (18 + V) x N (one point per column, V carried internal variables last); returns
   // (6 + V) x N: d_sigma (Pa), then the carried variables' increments; with `tangents`, one 6 x 6
   // d(d_sigma)/d(d_eps) per point (the stress rows).
-  Eigen::MatrixXd Evaluate(const Eigen::MatrixXd& inputs,
+  Eigen::MatrixXd Evaluate(const Eigen::MatrixXd& raw_inputs,
                            std::vector<Voigt6x6>* tangents = nullptr) const;
 };
 

@@ -162,13 +162,32 @@ std::pair<torch::Tensor, torch::Tensor> Standardisation(const torch::Tensor& val
   return {mean, scale};
 }
 
+// Each point's s = max(p_n, 0) + p_ref of a block of stresses (N, 6; Pa, tension positive), as
+// (N, 1) (MlpArchitecture::pressure_reference_pa).
+torch::Tensor PressureScale(const torch::Tensor& stress_pa, double reference_pa) {
+  return (-stress_pa.slice(1, 0, 3).sum(1, /*keepdim=*/true) / 3).clamp_min(0) + reference_pa;
+}
+
+// What the network sees of raw input rows (N, 18 + V): the rows themselves unscaled; scaled
+// (reference_pa > 0), the stress columns over s and log(s / p_ref) appended (N, 19 + V).
+torch::Tensor Features(const torch::Tensor& raw, double reference_pa) {
+  if (reference_pa <= 0) return raw;
+  const torch::Tensor scale = PressureScale(raw.slice(1, 6, 12), reference_pa);
+  return torch::cat({raw.slice(1, 0, 6), raw.slice(1, 6, 12) / scale, raw.slice(1, 12),
+                     torch::log(scale / reference_pa)},
+                    1);
+}
+
 // The TorchScript module: standardise, the tanh layers, the linear output, back to Pa. Anchored:
 // the same network at rest (the strain increment zeroed) subtracted, so that d_sigma(0) = 0.
+// Pressure-scaled (reference_pa > 0): the network sees Features and its stress outputs are
+// multiplied by s; the module still takes raw inputs and answers raw outputs.
 torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
-                                const std::vector<torch::Tensor>& biases, const torch::Tensor& in_mean,
-                                const torch::Tensor& in_scale, const torch::Tensor& out_mean,
-                                const torch::Tensor& out_scale, const std::string& architecture,
-                                bool anchored, const std::vector<std::string>& carried) {
+                                const std::vector<torch::Tensor>& biases,
+                                const torch::Tensor& in_mean, const torch::Tensor& in_scale,
+                                const torch::Tensor& out_mean, const torch::Tensor& out_scale,
+                                const std::string& architecture, bool anchored,
+                                const std::vector<std::string>& carried, double reference_pa) {
   torch::jit::Module module("StressSurrogate");
   module.register_attribute("carried_variables", c10::StringType::get(), Joined(carried, ","));
   module.register_buffer("in_mean", in_mean.detach().clone());
@@ -187,14 +206,27 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
     source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
            << ".t()) + self." << b << (last ? "" : ")") << "\n";
   }
-  source << "    return h\n"
-         << "def forward(self, x):\n";
+  source << "    return h\n";
+  const bool scaled = reference_pa > 0;
+  if (scaled) {
+    module.register_attribute("pressure_reference_pa", c10::FloatType::get(), reference_pa);
+    source << "def scale(self, x):\n"
+           << "    return torch.clamp(-(x[:, 6:7] + x[:, 7:8] + x[:, 8:9]) / 3, min=0.0) + "
+              "self.pressure_reference_pa\n"
+           << "def forward(self, raw):\n"
+           << "    s = self.scale(raw)\n"
+           << "    x = torch.cat([raw[:, 0:6], raw[:, 6:12] / s, raw[:, 12:], "
+              "torch.log(s / self.pressure_reference_pa)], 1)\n";
+  } else {
+    source << "def forward(self, x):\n";
+  }
   if (anchored) {
     source << "    rest = torch.cat([torch.zeros_like(x[:, 0:6]), x[:, 6:]], 1)\n"
-           << "    return (self.network(x) - self.network(rest)) * self.out_scale\n";
+           << "    y = (self.network(x) - self.network(rest)) * self.out_scale\n";
   } else {
-    source << "    return self.network(x) * self.out_scale + self.out_mean\n";
+    source << "    y = self.network(x) * self.out_scale + self.out_mean\n";
   }
+  source << (scaled ? "    return torch.cat([y[:, 0:6] * s, y[:, 6:]], 1)\n" : "    return y\n");
   module.define(source.str());
   module.eval();
   return module;
@@ -236,6 +268,8 @@ FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architectu
   fused.out_mean = VectorOf(module.attr("out_mean").toTensor());
   fused.out_scale = VectorOf(module.attr("out_scale").toTensor());
   fused.anchored = architecture.find("-anchored") != std::string::npos;
+  fused.pressure_reference_pa =
+      module.hasattr("pressure_reference_pa") ? module.attr("pressure_reference_pa").toDouble() : 0;
   return fused;
 }
 
@@ -258,6 +292,11 @@ void MlpArchitecture::Validate(const std::string& field_prefix) const {
     if (width < 1 || width > 4096) {
       throw InputError(field_prefix + "hidden_widths", "each layer 1 to 4096 wide");
     }
+  }
+  if (!(pressure_reference_pa == 0 ||
+        (pressure_reference_pa >= 1 && pressure_reference_pa <= 1e7))) {
+    throw InputError(field_prefix + "pressure_reference_pa",
+                     "must be 0 (no scaling) or in [1, 1e7] Pa");
   }
   if (carried_variables.size() > 16) {
     throw InputError(field_prefix + "carried_variables", "at most 16");
@@ -288,6 +327,11 @@ std::string MlpArchitecture::Describe() const {
     name += (k ? "x" : "") + std::to_string(hidden_widths[k]);
   }
   name += anchored ? "-tanh-anchored" : "-tanh";
+  if (pressure_reference_pa > 0) {
+    std::ostringstream reference;
+    reference << pressure_reference_pa;
+    name += "-pressure-scaled-" + reference.str() + "pa";
+  }
   if (!carried_variables.empty()) name += "-carrying-" + Joined(carried_variables, "+");
   return name;
 }
@@ -370,6 +414,7 @@ StressSurrogate StressSurrogate::FineTune(const StressSurrogate& base,
     architecture.hidden_widths.push_back(static_cast<int>(base.impl_->fused.weights[k].rows()));
   }
   architecture.anchored = base.impl_->fused.anchored;
+  architecture.pressure_reference_pa = base.impl_->fused.pressure_reference_pa;
   architecture.carried_variables = base.impl_->carried;
   return TrainFrom(histories, architecture, options, report, &base);
 }
@@ -441,8 +486,17 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   if (!torch::isfinite(x).all().item<bool>() || !torch::isfinite(y).all().item<bool>()) {
     throw InputError("histories", "a step holds a value that is not finite");
   }
-  auto [in_mean, in_scale] = Standardisation(x);
-  auto [out_mean, out_scale] = Standardisation(y);
+  // What the network sees and answers (MlpArchitecture::pressure_reference_pa): x and y
+  // themselves, or scaled.
+  const double reference_pa = architecture.pressure_reference_pa;
+  const torch::Tensor features = Features(x, reference_pa);
+  torch::Tensor answers = y;
+  if (reference_pa > 0) {
+    answers = y.clone();
+    answers.slice(1, 0, 6).div_(PressureScale(x.slice(1, 6, 12), reference_pa));
+  }
+  auto [in_mean, in_scale] = Standardisation(features);
+  auto [out_mean, out_scale] = Standardisation(answers);
   // Anchored, the output has no offset: d_sigma is the difference of two network answers.
   if (architecture.anchored) out_mean = torch::zeros_like(out_mean);
   if (base != nullptr) {
@@ -456,9 +510,9 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     out_mean = module.attr("out_mean").toTensor().detach().clone();
     out_scale = module.attr("out_scale").toTensor().detach().clone();
   }
-  const torch::Tensor xs = (x - in_mean) / in_scale;
-  const torch::Tensor ys = (y - out_mean) / out_scale;
-  torch::Tensor rest = x.clone();
+  const torch::Tensor xs = (features - in_mean) / in_scale;
+  const torch::Tensor ys = (answers - out_mean) / out_scale;
+  torch::Tensor rest = features.clone();
   rest.slice(1, 0, 6).zero_();
   const torch::Tensor xs_rest = (rest - in_mean) / in_scale;
 
@@ -489,7 +543,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
   torch::nn::Sequential net;
-  int width = kInputs + static_cast<int>(carried.size());
+  int width = kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
   std::vector<torch::nn::Linear> layers;
   for (int hidden : architecture.hidden_widths) {
     layers.push_back(torch::nn::Linear(width, hidden));
@@ -536,15 +590,19 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       if (architecture.anchored) {
         raw = torch::cat({raw, torch::cat({torch::zeros_like(strain_increment), state}, 1)}, 0);
       }
-      torch::Tensor answer = net->forward((raw - in_mean) / in_scale);
+      torch::Tensor answer = net->forward((Features(raw, reference_pa) - in_mean) / in_scale);
       if (architecture.anchored) {
         answer = answer.slice(0, 0, windows_per_batch) -
                  answer.slice(0, windows_per_batch, 2 * windows_per_batch);
       }
       answer = answer * out_scale + out_mean;
+      torch::Tensor stress_increment = answer.slice(1, 0, 6);
+      if (reference_pa > 0) {
+        stress_increment = stress_increment * PressureScale(stress, reference_pa);
+      }
       stress =
           torch::bmm(rollout.rotation_maps.index_select(0, step), stress.unsqueeze(2)).squeeze(2) +
-          answer.slice(1, 0, 6);
+          stress_increment;
       squared_error_sum =
           squared_error_sum + ((stress - rollout.stress_after.index_select(0, step)) /
                                rollout.path_stress_pa.index_select(0, step))
@@ -600,10 +658,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     weights.push_back(layer->weight);
     biases.push_back(layer->bias);
   }
-  auto impl = std::make_unique<Impl>(Impl{
-      ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
-                   architecture.Describe(), architecture.anchored, carried),
-      architecture.Describe(), FusedMlp{}, carried});
+  auto impl = std::make_unique<Impl>(
+      Impl{ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
+                        architecture.Describe(), architecture.anchored, carried, reference_pa),
+           architecture.Describe(), FusedMlp{}, carried});
   impl->fused = FusedOf(impl->module, impl->architecture);
   figures.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -48,9 +48,21 @@ struct MlpArchitecture {
   // (tiers::RveFabricVariables: "coordination_number", "solid_fraction"). Invariants only: a
   // tensor's components would have to turn with the step's rotation.
   std::vector<std::string> carried_variables = {};
+  // Pressure scaling, 0: none. A granular soil's stiffness grows with its mean stress p (about
+  // as p^0.5 for Hertzian contacts), so a network that answers d_sigma in Pa learns the
+  // high-pressure paths, whose increments are large, and leaves a point near the surface, whose
+  // stress is a few kPa, tens of per cent off. With a reference pressure p_ref > 0 the network
+  // sees the stress relative to s = max(p_n, 0) + p_ref, and log(s / p_ref) as a further input,
+  // and answers d_sigma / s:
+  //   inputs  [d_eps, sigma_n / s, eps_n, carried variables, log(s / p_ref)]
+  //   output  d_sigma = s N(...), the carried variables' increments as they are,
+  // so that its error is an error relative to the point's own stress level, at every level (the
+  // held-out metric's scale). p_ref keeps s away from 0 at a point with no stress. The saved
+  // module takes and answers the raw inputs and outputs all the same.
+  double pressure_reference_pa = 0;
   void Validate(const std::string& field_prefix) const;
-  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-carrying-" and the carried
-  // variables joined by "+" when there are any.
+  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-pressure-scaled-<p_ref>pa"
+  // when scaled, then "-carrying-" and the carried variables joined by "+" when there are any.
   std::string Describe() const;
 };
 
@@ -117,7 +129,7 @@ class StressSurrogate {
                                const TrainingOptions& options, TrainingReport* report = nullptr);
 
   // Transfer learning (seed 000's future work): a surrogate of another material started from
-  // `base`'s weights and standardisation (its architecture, anchored or not), trained on
+  // `base`'s weights and standardisation (its architecture, anchored, scaled or not), trained on
   // `histories` with `options` (fewer epochs and a smaller learning rate than from scratch, as a
   // rule). Throws as Train, and InputError("model", ...) for a base that is not an MLP.
   static StressSurrogate FineTune(const StressSurrogate& base,

@@ -112,13 +112,16 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << first.out;
   EXPECT_NE(first.out.find("mlp-16x16-tanh-anchored, 3 members"), std::string::npos) << first.out;
 
-  // The same data again, another network: every path from the dataset.
+  // The same data again, another network (unanchored, pressure-scaled): every path from the
+  // dataset.
   const CliRun second =
-      Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16 --unanchored");
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe +
+                                    " --hidden 16x16 --unanchored --pressure-scaled 500");
   ASSERT_EQ(second.exit_code, 0) << second.out;
   EXPECT_NE(second.out.find("tasks 30/30  cache hits 27"), std::string::npos)
       << "27 paths from the dataset, 3 members trained:\n" << second.out;
-  EXPECT_NE(second.out.find("mlp-16x16-tanh, 3 members"), std::string::npos) << second.out;
+  EXPECT_NE(second.out.find("mlp-16x16-tanh-pressure-scaled-500pa, 3 members"), std::string::npos)
+      << second.out;
 
   // The offline trainer on the same recipe, registering into the same data directory.
   const CliRun offline_run = RegisterWithGonogoAnn(data);
@@ -317,6 +320,10 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
        "carried_variables: 'fabric_xz' is a tensor's component"},
       {"train --soil seed000_sand_rve100 --from " + trained + " --carry coordination_number",
        "carried_variables: a fine-tuned model carries what its base model carries"},
+      {"train --soil seed000_sand_rve100 --pressure-scaled 0.5",
+       "pressure_reference_pa: must be 0 (no scaling) or in [1, 1e7] Pa"},
+      {"train --soil seed000_sand_rve100 --from " + trained + " --pressure-scaled 500",
+       "pressure_reference_pa: a fine-tuned model keeps its base model's pressure scaling"},
   };
   for (const auto& [args, message] : refusals) {
     const CliRun refused = Gonogo(server.endpoint(), args);
