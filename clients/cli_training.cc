@@ -32,12 +32,13 @@ void PrintModel(const v1::SurrogateModel& m) {
             << "  network:   " << m.architecture() << ", " << m.members() << " members"
             << (m.from_model().empty() ? "" : ", fine-tuned from " + m.from_model()) << "\n"
             << "  data:      " << m.samples() << " steps"
-            << (m.fallback_paths() > 0 ? " (" + std::to_string(m.fallback_paths()) +
-                                             " fallback paths, " +
-                                             Percent(m.fallback_paths_share()) + " of the loss)"
-                                       : std::string())
-            << ", hash " << m.data_hash() << ", trained in "
-            << FormatNumber(m.training_seconds()) << " s\n"
+            << (m.fallback_paths() > 0
+                    ? " (" + std::to_string(m.fallback_paths()) + " fallback paths, " +
+                          Percent(m.fallback_paths_share()) + " of the loss)"
+                    : std::string())
+            << ", hash " << m.data_hash() << ", trained in " << FormatNumber(m.training_seconds())
+            << " s\n"
+            << "  training:  " << (m.training().empty() ? "(not recorded)" : m.training()) << "\n"
             << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
             << FormatNumber(m.spread_threshold()) << ", principal stresses capped at "
             << (std::isfinite(m.tensile_limit_pa()) ? FormatNumber(m.tensile_limit_pa()) + " Pa"

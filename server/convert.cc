@@ -37,6 +37,7 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
   out.set_worst_held_out_error(m.worst_held_out_error);
   out.set_worst_error_beyond_floor(tiers::WorstErrorBeyondFloor(m));
   out.set_training_seconds(m.training_seconds);
+  out.set_training(m.training);
   out.set_from_model(m.from_model);
   out.set_code_version(m.code_version);
   out.set_created_unix_ms(m.created_unix_ms);

@@ -762,6 +762,10 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
         record.held_out.begin(), record.held_out.end(),
         [](const auto& a, const auto& b) { return a.replay_error < b.replay_error; });
     record.training_seconds = training_seconds;
+    ann::TrainingOptions member_training = recipe.training;  // as the member tasks ran it
+    member_training.history_weights.assign(member_work.history_weights().begin(),
+                                           member_work.history_weights().end());
+    record.training = tiers::TrainingText(member_training);
     record.from_model = request.from_model();
     record.code_version = GONOGO_VERSION;
     record.created_unix_ms = NowUnixMs();

@@ -319,8 +319,9 @@ struct Study {
 // its files (--out), its registration (--register) and its fe-ann runs against fe-de
 // (--validate-load-n).
 void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemble& ensemble,
-                    const std::string& name, int epochs, const std::vector<TrainingReport>& reports,
-                    double train_s, const std::string& from_model) {
+                    const std::string& name, const TrainingOptions& options,
+                    const std::vector<TrainingReport>& reports, double train_s,
+                    const std::string& from_model) {
   double final_loss = 0;
   double final_rollout_loss = 0;
   for (const TrainingReport& report : reports) {
@@ -331,7 +332,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     std::fprintf(stderr, "%s: the rollout term over %d steps, last epoch, members' mean: %.3g\n",
                  name.c_str(), line.rollout_steps, final_rollout_loss);
   }
-  std::printf("%s,%zu,%d,%lld,%.1f,%.3g,", name.c_str(), ensemble.size(), epochs,
+  std::printf("%s,%zu,%d,%lld,%.1f,%.3g,", name.c_str(), ensemble.size(), options.epochs,
               static_cast<long long>(reports.front().samples), train_s, final_loss);
   std::vector<double> held_out_errors;  // replayed once: the row and the record both show them
   for (const StrainHistory& history : study.held_out) {
@@ -371,6 +372,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
       record.worst_held_out_error = std::max(record.worst_held_out_error, held_out_errors[k]);
     }
     record.training_seconds = train_s;
+    record.training = tiers::TrainingText(options);
     record.from_model = from_model;
     record.code_version = GONOGO_VERSION;
     record.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -650,7 +652,7 @@ int Run(const CommandLine& line) {
     const SurrogateEnsemble tuned =
         SurrogateEnsemble::FineTune(base, study.training, options, &reports);
     ReportEnsemble(line, study, tuned, base.member(0).architecture() + "-from-" + base_name,
-                   line.epochs, reports, Since(train_start), base_name);
+                   options, reports, Since(train_start), base_name);
   }
   for (const std::string& text : line.architectures) {
     if (text.rfind("gru", 0) == 0) {
@@ -668,8 +670,7 @@ int Run(const CommandLine& line) {
     const SurrogateEnsemble ensemble =
         SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
     const double train_s = Since(train_start);
-    ReportEnsemble(line, study, ensemble, architecture.Describe(), line.epochs, reports, train_s,
-                   "");
+    ReportEnsemble(line, study, ensemble, architecture.Describe(), options, reports, train_s, "");
   }
   return 0;
 }

@@ -48,6 +48,7 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "least_principal_ratio = " << Number(r.least_principal_ratio) << "\n"
       << "worst_held_out_error = " << Number(r.worst_held_out_error) << "\n"
       << "training_seconds = " << Number(r.training_seconds) << "\n"
+      << "training = " << r.training << "\n"
       << "from_model = " << r.from_model << "\n"
       << "code_version = " << r.code_version << "\n"
       << "created_unix_ms = " << r.created_unix_ms << "\n";
@@ -113,6 +114,7 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
     }
     r.worst_held_out_error = std::stod(values.at("worst_held_out_error"));
     r.training_seconds = std::stod(values.at("training_seconds"));
+    if (values.count("training") != 0) r.training = values.at("training");  // absent before: ""
     r.from_model = values.at("from_model");
     r.code_version = values.at("code_version");
     r.created_unix_ms = std::stoll(values.at("created_unix_ms"));
@@ -125,6 +127,19 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
 }
 
 }  // namespace
+
+std::string TrainingText(const ann::TrainingOptions& options) {
+  std::ostringstream out;  // six significant digits: a record a person reads
+  out << "epochs=" << options.epochs << " batch_size=" << options.batch_size
+      << " learning_rate=" << options.learning_rate << " seed=" << options.seed
+      << " path_stress_weighting=" << options.path_stress_weighting
+      << " rollout_steps=" << options.rollout_steps;
+  if (options.rollout_steps > 0) out << " rollout_weight=" << options.rollout_weight;
+  out << " weighted_histories="
+      << std::count_if(options.history_weights.begin(), options.history_weights.end(),
+                       [](double weight) { return weight != 1.0; });
+  return out.str();
+}
 
 void ValidateModelId(const std::string& id, const std::string& field) {
   Require(!id.empty() && id.size() <= 64, field, "must be 1 to 64 characters");

@@ -41,10 +41,20 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   std::vector<HeldOutResult> held_out;
   double worst_held_out_error = 0;
   double training_seconds = 0;
+  // How its members were trained (TrainingText); "" for a record made before it was kept.
+  std::string training;
   std::string from_model;  // "" unless fine-tuned
   std::string code_version;
   std::int64_t created_unix_ms = 0;
 };
+
+// How a model's members were trained, for its record: "epochs=300 batch_size=64
+// learning_rate=0.003 seed=1 path_stress_weighting=0 rollout_steps=0 weighted_histories=0", with
+// rollout_weight after rollout_steps when the term is on. Member k was trained with seed + k;
+// weighted_histories counts the training histories whose weight in the loss is not 1
+// (TrainingOptions::history_weights). What the network is (anchoring, pressure scaling, carried
+// variables) is its architecture's name.
+std::string TrainingText(const ann::TrainingOptions& options);
 
 // How far a model's held-out errors lie beyond its RVE's own spread: over the held-out paths, the
 // largest of (error - the path's PackingFloor, the median of its differences on other packings of

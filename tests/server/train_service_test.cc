@@ -144,6 +144,13 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << "the same members, trained on other ranks:\n" << models.out;
   EXPECT_EQ(LineAfter(pool_block, "envelope:"), LineAfter(offline_block, "envelope:"))
       << models.out;
+  // How the members were trained, recorded by both (the recipe's 60 epochs, the rest defaults).
+  EXPECT_EQ(LineAfter(pool_block, "training:"),
+            "  epochs=60 batch_size=64 learning_rate=0.003 seed=1 path_stress_weighting=0 "
+            "rollout_steps=0 weighted_histories=0")
+      << models.out;
+  EXPECT_EQ(LineAfter(pool_block, "training:"), LineAfter(offline_block, "training:"))
+      << models.out;
 
   // The dataset: listed, exported as CSV and .npy, each path's rank in the index.
   const CliRun listed = Gonogo(server.endpoint(), "dataset --soil seed000_sand_rve100");

@@ -50,6 +50,7 @@ RegisteredSurrogate Record(const std::string& id, const std::string& soil, doubl
   r.held_out = {{"triaxial 14.1 kPa", worst_error / 2, {}}, {"rig point 1", worst_error, {}}};
   r.worst_held_out_error = worst_error;
   r.training_seconds = 1.5;
+  r.training = "epochs=60 batch_size=64";
   r.code_version = "test";
   r.created_unix_ms = created_unix_ms;
   return r;
@@ -84,6 +85,7 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(described->soil_parameters, "model=dem-hertz-mindlin;soil=sand");
   EXPECT_EQ(described->architecture, "mlp-8-tanh-anchored");
   EXPECT_EQ(described->samples, 60);
+  EXPECT_EQ(described->training, "epochs=60 batch_size=64");
   EXPECT_EQ(described->fallback_paths, 7);
   EXPECT_EQ(described->fallback_paths_share, 0.2);
   EXPECT_EQ(registry.Describe("sand-b")->fallback_paths, 0);
@@ -198,14 +200,14 @@ TEST_F(SurrogateRegistryTest, ReadsARecordMadeBeforeItsLaterFields) {
   std::string kept, line;
   int dropped = 0;
   while (std::getline(in, line)) {
-    const bool later = line.rfind("fallback_paths", 0) == 0 ||
-                       line.rfind("tensile_limit_pa", 0) == 0 ||
-                       line.rfind("least_principal_ratio", 0) == 0;
+    const bool later =
+        line.rfind("fallback_paths", 0) == 0 || line.rfind("tensile_limit_pa", 0) == 0 ||
+        line.rfind("least_principal_ratio", 0) == 0 || line.rfind("training = ", 0) == 0;
     dropped += later;
     if (!later) kept += line + "\n";
   }
   in.close();
-  ASSERT_EQ(dropped, 4) << "the record's later fields were not where this test looks";
+  ASSERT_EQ(dropped, 5) << "the record's later fields were not where this test looks";
   std::ofstream(file) << kept;
   const std::optional<RegisteredSurrogate> old = registry.Describe("old");
   ASSERT_TRUE(old.has_value());
@@ -213,6 +215,7 @@ TEST_F(SurrogateRegistryTest, ReadsARecordMadeBeforeItsLaterFields) {
   EXPECT_EQ(old->fallback_paths_share, 0);
   EXPECT_TRUE(std::isinf(old->tensile_limit_pa));
   EXPECT_EQ(old->least_principal_ratio, 0);
+  EXPECT_EQ(old->training, "");
   EXPECT_EQ(old->samples, 60);
 }
 
@@ -249,6 +252,26 @@ TEST_F(SurrogateRegistryTest, WhatACrashLeavesIsNeitherListedNorKept) {
   EXPECT_EQ(registry.CollectAbandoned(), 1);
   EXPECT_FALSE(fs::exists(root_ / ".half.registering.99"));
   EXPECT_TRUE(fs::exists(root_ / "whole"));
+}
+
+// A model's record says how its members were trained: the rollout term's weight only when the
+// term is on, and how many histories the loss weighs other than 1.
+TEST(TrainingText, NamesTheOptionsThatShapedTheMembers) {
+  ann::TrainingOptions options;
+  options.epochs = 300;
+  options.batch_size = 64;
+  options.learning_rate = 0.003;
+  options.seed = 7;
+  EXPECT_EQ(TrainingText(options),
+            "epochs=300 batch_size=64 learning_rate=0.003 seed=7 path_stress_weighting=0 "
+            "rollout_steps=0 weighted_histories=0");
+  options.path_stress_weighting = 0.5;
+  options.rollout_steps = 20;
+  options.rollout_weight = 0.1;
+  options.history_weights = {1.0, 2.5, 1.0, 0.25};
+  EXPECT_EQ(TrainingText(options),
+            "epochs=300 batch_size=64 learning_rate=0.003 seed=7 path_stress_weighting=0.5 "
+            "rollout_steps=20 rollout_weight=0.1 weighted_histories=2");
 }
 
 }  // namespace
