@@ -622,16 +622,14 @@ int Run(const CommandLine& line) {
   if (line.walk_share > 0) {
     // Walks and the rest weighed so that the walks' steps carry walk_share of the loss (the rig's
     // recorded paths, after the recipe's, count as the rest).
-    std::vector<bool> is_walk;
-    double walk_steps = 0, other_steps = 0;
+    history_weights = tiers::WalkShareWeights(training_paths, training_all, line.walk_share);
+    double walk_steps = 0, other_steps = 0, walk_weight = 1;
     for (std::size_t k = 0; k < training_all.size(); ++k) {
-      is_walk.push_back(k < training_paths.size() &&
-                        training_paths[k].spec.path == ann::LabPath::kRandomWalk);
-      (is_walk.back() ? walk_steps : other_steps) += static_cast<double>(training_all[k].steps());
+      const bool walk =
+          k < training_paths.size() && training_paths[k].spec.path == ann::LabPath::kRandomWalk;
+      (walk ? walk_steps : other_steps) += static_cast<double>(training_all[k].steps());
+      if (walk) walk_weight = history_weights[k];
     }
-    const double walk_weight =
-        walk_steps > 0 ? line.walk_share * other_steps / ((1 - line.walk_share) * walk_steps) : 1;
-    for (bool walk : is_walk) history_weights.push_back(walk ? walk_weight : 1.0);
     std::printf("# the walks' %.0f steps weigh %.3g each, the other %.0f steps 1\n", walk_steps,
                 walk_weight, other_steps);
   }

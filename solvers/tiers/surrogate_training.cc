@@ -66,6 +66,30 @@ void SurrogateRecipe::Validate(const std::string& p) const {
   Require(threads >= 1 && threads <= 1024, p + "threads", "must lie in [1, 1024]");
   Require(rotated_copies >= 0 && rotated_copies <= 64, p + "rotated_copies",
           "must lie in [0, 64]");
+  Require(std::isfinite(walk_share) && walk_share >= 0 && walk_share <= 0.99, p + "walk_share",
+          "must lie in [0, 0.99]");
+  Require(walk_share == 0 || rotated_copies == 0, p + "walk_share",
+          "weighs the walks of the laboratory's frame only: not with rotated_copies");
+  Require(walk_share == 0 || training.history_weights.empty(), p + "walk_share",
+          "sets the histories' weights itself: not with training.history_weights");
+}
+
+std::vector<double> WalkShareWeights(const std::vector<NamedLabPath>& training_paths,
+                                     const std::vector<ann::StrainHistory>& histories,
+                                     double walk_share) {
+  std::vector<bool> is_walk;
+  double walk_steps = 0, other_steps = 0;
+  for (std::size_t k = 0; k < histories.size(); ++k) {
+    is_walk.push_back(k < training_paths.size() &&
+                      training_paths[k].spec.path == ann::LabPath::kRandomWalk);
+    (is_walk.back() ? walk_steps : other_steps) += static_cast<double>(histories[k].steps());
+  }
+  const double walk_weight = walk_steps > 0 && other_steps > 0
+                                 ? walk_share * other_steps / ((1 - walk_share) * walk_steps)
+                                 : 1;
+  std::vector<double> weights;
+  for (bool walk : is_walk) weights.push_back(walk ? walk_weight : 1.0);
+  return weights;
 }
 
 std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe) {
@@ -291,11 +315,16 @@ TrainedSurrogate TrainSurrogateOnRve(
   }
   trained.data_hash = HistoriesHash(trained.training);
 
+  ann::TrainingOptions training = recipe.training;
+  if (recipe.walk_share > 0) {
+    training.history_weights =
+        WalkShareWeights(training_paths, trained.training, recipe.walk_share);
+  }
   if (stage) stage("training", 0);
   const auto train_start = std::chrono::steady_clock::now();
   trained.ensemble = ann::SurrogateEnsemble::Train(
       ann::WithRotatedCopies(trained.training, recipe.rotated_copies, recipe.training.seed),
-      recipe.architecture, recipe.training, recipe.members);
+      recipe.architecture, training, recipe.members);
   trained.training_seconds = Seconds(train_start);
   for (std::size_t k = 0; k < trained.held_out.size(); ++k) {
     const double error = ann::ReplayError(trained.ensemble, trained.held_out[k]);

@@ -50,11 +50,24 @@ struct SurrogateRecipe {
   // the training set and to the held-out set ("rig point k").
   std::vector<ann::StrainHistory> rig_training;
   std::vector<ann::StrainHistory> rig_held_out;
+  // > 0: the random walks' share of the training loss, in [0, 0.99] (WalkShareWeights); 0: their
+  // share of the steps. Not with rotated copies or with training.history_weights of its own.
+  double walk_share = 0;
   SurrogateRecipe();
   void Validate(const std::string& field_prefix) const;
 };
 
 std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe);
+
+// Loss weights (ann::TrainingOptions::history_weights) for `histories`, whose first ones are the
+// histories of `training_paths` in order (a path that stopped early is shorter) and the rest any
+// others (the rig's recorded paths): every walk's steps weigh w and every other step 1, with w such
+// that the walks carry `walk_share` of the loss,
+//   w walk_steps / (w walk_steps + other_steps) = walk_share.
+// Without walks or without other steps every weight is 1.
+std::vector<double> WalkShareWeights(const std::vector<NamedLabPath>& training_paths,
+                                     const std::vector<ann::StrainHistory>& histories,
+                                     double walk_share);
 std::vector<NamedLabPath> HeldOutPaths(const SurrogateRecipe& recipe);
 
 // Runs `paths` on `model` on `threads` OpenMP threads; `progress` (if set) is called with the
