@@ -12,6 +12,8 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "clients/cli_commands.h"
 
@@ -25,19 +27,29 @@ std::string Percent(double fraction) {
   return out.str();
 }
 
+// What carried the loss beyond each step's share, for the model's data line: " (the walks 60.0 %
+// of the recipe's loss; 37 fallback paths, 20.0 % of the loss)", "" when nothing was weighed.
+std::string DataShares(const v1::SurrogateModel& m) {
+  std::vector<std::string> parts;
+  if (m.walk_share() > 0)
+    parts.push_back("the walks " + Percent(m.walk_share()) + " of the recipe's loss");
+  if (m.fallback_paths() > 0) {
+    parts.push_back(std::to_string(m.fallback_paths()) + " fallback paths, " +
+                    Percent(m.fallback_paths_share()) + " of the loss");
+  }
+  std::string text;
+  for (const std::string& part : parts) text += (text.empty() ? " (" : "; ") + part;
+  return text.empty() ? text : text + ")";
+}
+
 void PrintModel(const v1::SurrogateModel& m) {
   std::cout << m.id() << "\n"
             << "  soil:      " << (m.soil_name().empty() ? "(explicit parameters)" : m.soil_name())
             << ", RVEs of the " << m.fe_de_preset() << " fe-de configuration\n"
             << "  network:   " << m.architecture() << ", " << m.members() << " members"
             << (m.from_model().empty() ? "" : ", fine-tuned from " + m.from_model()) << "\n"
-            << "  data:      " << m.samples() << " steps"
-            << (m.fallback_paths() > 0
-                    ? " (" + std::to_string(m.fallback_paths()) + " fallback paths, " +
-                          Percent(m.fallback_paths_share()) + " of the loss)"
-                    : std::string())
-            << ", hash " << m.data_hash() << ", trained in " << FormatNumber(m.training_seconds())
-            << " s\n"
+            << "  data:      " << m.samples() << " steps" << DataShares(m) << ", hash "
+            << m.data_hash() << ", trained in " << FormatNumber(m.training_seconds()) << " s\n"
             << "  training:  " << (m.training().empty() ? "(not recorded)" : m.training()) << "\n"
             << "  envelope:  distance " << FormatNumber(m.distance_threshold()) << ", spread "
             << FormatNumber(m.spread_threshold()) << ", principal stresses capped at "
@@ -213,6 +225,12 @@ Command AddTrainCommand(CLI::App& parent) {
           "the network sees the stress relative to max(p, 0) + this reference pressure and "
           "answers d_sigma relative to it (solvers/ann/README.md) [default: 0, unscaled]")
       ->type_name("PA");
+  train
+      ->add_option_function<double>(
+          "--walk-share", [&r](double v) { r.set_walk_share(v); },
+          "the random walks' share of the recipe paths' loss, their steps weighed to give it, in "
+          "[0, 0.99] [default: 0, their share of the steps]")
+      ->type_name("F");
   train->add_option_function<std::vector<std::string>>(
            "--carry",
            [&r](const std::vector<std::string>& names) {

@@ -19,6 +19,7 @@ v1::SurrogateModel ToProto(const tiers::RegisteredSurrogate& m) {
   out.set_samples(m.samples);
   out.set_fallback_paths(static_cast<uint32_t>(m.fallback_paths));
   out.set_fallback_paths_share(m.fallback_paths_share);
+  out.set_walk_share(m.walk_share);
   out.set_distance_threshold(m.distance_threshold);
   out.set_spread_threshold(m.spread_threshold);
   out.set_tensile_limit_pa(m.tensile_limit_pa);

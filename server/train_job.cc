@@ -103,6 +103,7 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   Require(!(fine_tuning && request.pressure_reference_pa() != 0), "pressure_reference_pa",
           "a fine-tuned model keeps its base model's pressure scaling");
   recipe.architecture.pressure_reference_pa = request.pressure_reference_pa();
+  recipe.walk_share = request.walk_share();
   recipe.architecture.Validate("");
   if (request.carried_variables_size() > 0) {
     Require(!fine_tuning, "carried_variables",
@@ -659,19 +660,32 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       }
     }
 
-    // The fallback paths kept from fe-ann curves, weighed to carry the asked share of the loss.
+    // The recipe's walks weighed to carry the asked share of the recipe paths' loss: `training`
+    // holds the recipe's training paths in TrainingPaths order, then the rig's, as
+    // WalkShareWeights takes them (the order gonogo-ann weighs them in, so both train alike).
+    std::vector<double> recipe_weights(training.size(), 1.0);
+    if (recipe.walk_share > 0) {
+      recipe_weights =
+          tiers::WalkShareWeights(tiers::TrainingPaths(recipe), training, recipe.walk_share);
+    }
+    // The fallback paths kept from fe-ann curves, weighed to carry the asked share of the whole
+    // loss beside the recipe paths' weighed steps.
     const double fallback_share = request.fallback_paths_share();
     int fallback_paths = 0;
+    if (recipe.walk_share > 0 || fallback_share > 0) {
+      member_work.mutable_history_weights()->Add(recipe_weights.begin(), recipe_weights.end());
+    }
     if (fallback_share > 0) {
       // The dataset's fallback paths (server/fallback_paths.h), in the order they were kept.
       const std::vector<cache::StoredHistory> rows =
           store.Histories(dataset, cache::kTrainingRole, kFallbackPathKind);
       Require(!rows.empty(), "fallback_paths_share", "dataset " + dataset + " holds no fallback paths");
-      double recipe_steps = 0, fallback_steps = 0;
-      for (const ann::StrainHistory& history : training) recipe_steps += history.steps();
+      double recipe_steps = 0, fallback_steps = 0;  // weighed recipe steps
+      for (size_t k = 0; k < training.size(); ++k) {
+        recipe_steps += recipe_weights[k] * static_cast<double>(training[k].steps());
+      }
       for (const cache::StoredHistory& row : rows) fallback_steps += static_cast<double>(row.steps);
       const double weight = fallback_share * recipe_steps / ((1 - fallback_share) * fallback_steps);
-      for (int k = 0; k < member_work.histories_size(); ++k) member_work.add_history_weights(1.0);
       for (const cache::StoredHistory& row : rows) {
         training.push_back(ann::ParseHistory(row.history));
         member_work.add_histories(row.history);
@@ -701,6 +715,9 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
       }
       member_tasks.push_back(TrainingTask(std::move(work), config_.task_delay_ms));
     }
+    // The weights as the member tasks ran them, for the record (member_work's copy is freed).
+    const std::vector<double> member_weights(member_work.history_weights().begin(),
+                                             member_work.history_weights().end());
     member_work.Clear();
     std::vector<std::string> member_bytes(static_cast<size_t>(members));
     int members_done = 0;
@@ -746,6 +763,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     }
     record.fallback_paths = fallback_paths;
     record.fallback_paths_share = fallback_share;  // 0 when none asked (then fallback_paths 0)
+    record.walk_share = recipe.walk_share;
     record.distance_threshold = ensemble.distance_threshold();
     record.spread_threshold = ensemble.spread_threshold();
     record.tensile_limit_pa = ensemble.envelope().tensile_limit_pa;
@@ -763,8 +781,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
         [](const auto& a, const auto& b) { return a.replay_error < b.replay_error; });
     record.training_seconds = training_seconds;
     ann::TrainingOptions member_training = recipe.training;  // as the member tasks ran it
-    member_training.history_weights.assign(member_work.history_weights().begin(),
-                                           member_work.history_weights().end());
+    member_training.history_weights = member_weights;
     record.training = tiers::TrainingText(member_training);
     record.from_model = request.from_model();
     record.code_version = GONOGO_VERSION;

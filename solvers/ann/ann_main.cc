@@ -373,6 +373,7 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     }
     record.training_seconds = train_s;
     record.training = tiers::TrainingText(options);
+    record.walk_share = line.walk_share;
     record.from_model = from_model;
     record.code_version = GONOGO_VERSION;
     record.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(

@@ -20,6 +20,44 @@ namespace {
 
 constexpr char kRecordFile[] = "model.txt";
 constexpr char kRecordHeader[] = "# gonogo surrogate model 1";
+// An id's stem ("<soil>-<architecture>") at most: with "-<n>" after it, up to 7 digits, an id
+// stays within ValidateModelId's 64 characters.
+constexpr std::size_t kIdStemChars = 56;
+
+// `text` with every `from` replaced by `to`.
+std::string Replaced(std::string text, const std::string& from, const std::string& to) {
+  for (std::size_t at = text.find(from); at != std::string::npos;
+       at = text.find(from, at + to.size())) {
+    text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+// The short form of an architecture's name (MlpArchitecture::Describe), for an id that would
+// otherwise be cut: "mlp-128x128-tanh-anchored-pressure-scaled-3000pa-carrying-coordination_number"
+// is "mlp-128x128-anchored-ps3000pa-cn". Every network is tanh; the carried variables by their
+// initials (fabric_xy: fxy).
+std::string ShortArchitecture(std::string architecture) {
+  for (const auto& [from, to] : {std::pair<const char*, const char*>{"-tanh", ""},
+                                 {"-pressure-scaled-", "-ps"},
+                                 {"-carrying-", "-"},
+                                 {"coordination_number", "cn"},
+                                 {"solid_fraction", "sf"},
+                                 {"fabric_", "f"}}) {
+    architecture = Replaced(std::move(architecture), from, to);
+  }
+  return architecture;
+}
+
+// "<soil>-<architecture>" in an id's characters (any other is '-').
+std::string IdCharacters(const std::string& text) {
+  std::string id;
+  for (char c : text) {
+    const bool kept = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+    id += kept ? c : '-';
+  }
+  return id;
+}
 
 std::string Number(double value) {
   char text[40];
@@ -42,6 +80,7 @@ std::string RecordText(const RegisteredSurrogate& r) {
       << "samples = " << r.samples << "\n"
       << "fallback_paths = " << r.fallback_paths << "\n"
       << "fallback_paths_share = " << Number(r.fallback_paths_share) << "\n"
+      << "walk_share = " << Number(r.walk_share) << "\n"
       << "distance_threshold = " << Number(r.distance_threshold) << "\n"
       << "spread_threshold = " << Number(r.spread_threshold) << "\n"
       << "tensile_limit_pa = " << Number(r.tensile_limit_pa) << "\n"
@@ -104,6 +143,7 @@ std::optional<RegisteredSurrogate> ReadRecord(const fs::path& directory) {
       r.fallback_paths = std::stoi(values.at("fallback_paths"));
       r.fallback_paths_share = std::stod(values.at("fallback_paths_share"));
     }
+    if (values.count("walk_share") != 0) r.walk_share = std::stod(values.at("walk_share"));
     r.distance_threshold = std::stod(values.at("distance_threshold"));
     r.spread_threshold = std::stod(values.at("spread_threshold"));
     if (values.count("tensile_limit_pa") != 0) {  // absent before the cap: none
@@ -218,12 +258,13 @@ std::optional<SurrogateModelRecord> SurrogateRegistry::Best(const std::string& s
 
 std::string SurrogateRegistry::NewId(const std::string& soil_name,
                                      const std::string& architecture) const {
-  std::string stem;
-  for (char c : soil_name + "-" + architecture) {
-    const bool kept = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
-    stem += kept ? c : '-';
+  std::string stem = IdCharacters(soil_name + "-" + architecture);
+  if (stem.size() > kIdStemChars)
+    stem = IdCharacters(soil_name + "-" + ShortArchitecture(architecture));
+  if (stem.size() > kIdStemChars) {  // still too long: cut after a whole word
+    const std::size_t last_dash = stem.rfind('-', kIdStemChars);
+    stem.resize(last_dash != std::string::npos && last_dash > 0 ? last_dash : kIdStemChars);
   }
-  if (stem.size() > 48) stem.resize(48);
   if (stem.empty() || stem.front() == '-') stem = "model" + stem;
   for (int n = 1;; ++n) {
     const std::string id = stem + "-" + std::to_string(n);

@@ -33,6 +33,9 @@ struct RegisteredSurrogate : SurrogateModelRecord {
   // --fallback-paths-share) and the share of the loss they carried; 0 for a record made before.
   int fallback_paths = 0;
   double fallback_paths_share = 0;
+  // The share of the recipe paths' loss its random walks carried (SurrogateRecipe::walk_share); 0:
+  // their share of the steps, and for a record made before it was kept.
+  double walk_share = 0;
   double distance_threshold = 0;
   double spread_threshold = 0;
   // SurrogateEnsemble::Admissible's cap (Pa); infinite for a record made before it existed.
@@ -79,7 +82,10 @@ class SurrogateRegistry : public SurrogateModelSource {
   // InputError("model.id", ...) for a malformed or taken id.
   RegisteredSurrogate Register(RegisteredSurrogate record,
                                const ann::SurrogateEnsemble& ensemble) const;
-  // A fresh id for a model of `soil_name` and `architecture`: "<soil>-<architecture>-<n>".
+  // A fresh id for a model of `soil_name` and `architecture`: "<soil>-<architecture>-<n>", the
+  // architecture in its short form where the whole would make the id longer than 56 characters
+  // before "-<n>" ("mlp-128x128-anchored-ps3000pa-cn": no "-tanh", "pressure-scaled-" as "ps", the
+  // carried variables by their initials), and cut after a whole word if even that is.
   std::string NewId(const std::string& soil_name, const std::string& architecture) const;
   // Removes what a crash mid-registration left; returns how many.
   int CollectAbandoned() const;

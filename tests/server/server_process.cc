@@ -107,11 +107,11 @@ CliRun Gonogo(const std::string& endpoint, const std::string& args) {
   return RunShell(BinaryDir() + "/clients/gonogo --server " + endpoint + " " + args);
 }
 
-CliRun RegisterWithGonogoAnn(const fs::path& data_dir) {
+CliRun RegisterWithGonogoAnn(const fs::path& data_dir, const std::string& more_options) {
   return RunShell("OMP_WAIT_POLICY=passive " + BinaryDir() + "/solvers/ann/gonogo-ann " +
                   kSmallSurrogateRecipe +
                   " --preset tiny --architecture 16x16 --threads 2 --register " +
-                  data_dir.string());
+                  data_dir.string() + more_options);
 }
 
 bool MakeSampleTerrain(const fs::path& out, int size) {

@@ -97,9 +97,9 @@ CliRun RunShell(const std::string& command);
 // 60 epochs), as gonogo-ann and gonogo train options.
 inline constexpr char kSmallSurrogateRecipe[] =
     "--soil seed000_sand_rve100 --steps 20 --walks 4 --epochs 60";
-// gonogo-ann on that recipe at the tiny preset, a 16x16 MLP, registering into `data_dir`: its
-// output and exit code.
-CliRun RegisterWithGonogoAnn(const fs::path& data_dir);
+// gonogo-ann on that recipe at the tiny preset, a 16x16 MLP, registering into `data_dir`, with
+// `more_options` (" --walk-share 0.6"): its output and exit code.
+CliRun RegisterWithGonogoAnn(const fs::path& data_dir, const std::string& more_options = "");
 
 struct MapFiles {
   std::string cone_index, slope, elevation, soil_class, soil_table;

@@ -103,8 +103,9 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(no_data.exit_code, 0) << no_data.out;
   EXPECT_NE(no_data.out.find("no datasets"), std::string::npos) << no_data.out;
 
-  const CliRun first =
-      Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --hidden 16x16");
+  // The walks weighed to carry 60 % of the loss, as the one model's recipe does.
+  const CliRun first = Gonogo(server.endpoint(),
+                              std::string("train ") + kRecipe + " --hidden 16x16 --walk-share 0.6");
   ASSERT_EQ(first.exit_code, 0) << first.out;
   const std::string trained = RegisteredId(first.out);
   ASSERT_FALSE(trained.empty()) << first.out;
@@ -124,7 +125,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << second.out;
 
   // The offline trainer on the same recipe, registering into the same data directory.
-  const CliRun offline_run = RegisterWithGonogoAnn(data);
+  const CliRun offline_run = RegisterWithGonogoAnn(data, " --walk-share 0.6");
   ASSERT_EQ(offline_run.exit_code, 0) << offline_run.out;
   std::smatch match;
   ASSERT_TRUE(std::regex_search(offline_run.out, match,
@@ -144,11 +145,18 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       << "the same members, trained on other ranks:\n" << models.out;
   EXPECT_EQ(LineAfter(pool_block, "envelope:"), LineAfter(offline_block, "envelope:"))
       << models.out;
-  // How the members were trained, recorded by both (the recipe's 60 epochs, the rest defaults).
+  // How the members were trained, recorded by both (the recipe's 60 epochs, its 4 walks weighed,
+  // the rest defaults): the same held-out errors above say the weights were the same too.
   EXPECT_EQ(LineAfter(pool_block, "training:"),
             "  epochs=60 batch_size=64 learning_rate=0.003 seed=1 path_stress_weighting=0 "
-            "rollout_steps=0 weighted_histories=0")
+            "rollout_steps=0 weighted_histories=4")
       << models.out;
+  for (const std::string& block : {pool_block, offline_block}) {
+    EXPECT_NE(
+        LineAfter(block, "data:").find(" steps (the walks 60.0 % of the recipe's loss), hash "),
+        std::string::npos)
+        << models.out;
+  }
   EXPECT_EQ(LineAfter(pool_block, "training:"), LineAfter(offline_block, "training:"))
       << models.out;
 
@@ -331,6 +339,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
        "pressure_reference_pa: must be 0 (no scaling) or in [1, 1e7] Pa"},
       {"train --soil seed000_sand_rve100 --from " + trained + " --pressure-scaled 500",
        "pressure_reference_pa: a fine-tuned model keeps its base model's pressure scaling"},
+      {"train --soil seed000_sand_rve100 --walk-share 1", "walk_share: must lie in [0, 0.99]"},
   };
   for (const auto& [args, message] : refusals) {
     const CliRun refused = Gonogo(server.endpoint(), args);
@@ -387,9 +396,11 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_NE(kept_index.find("model " + carrying_id + ", 0.5 x 0.2 m wheel at 1000 N,training,"),
             std::string::npos)
       << kept_index;
+  // The recipe's walks weighed too: they carry half the recipe paths' loss, the fallback paths
+  // 20 % of the whole.
   const CliRun refined =
       Gonogo(server.endpoint(), std::string("train ") + kRecipe + " --from " + carrying_id +
-                                    " --fallback-paths-share 0.2");
+                                    " --fallback-paths-share 0.2 --walk-share 0.5");
   ASSERT_EQ(refined.exit_code, 0) << refined.out;
   EXPECT_NE(refined.out.find(std::to_string(fallback_paths) + " of them fallback paths"),
             std::string::npos)
@@ -401,9 +412,16 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
             LineAfter(ModelBlock(refined_models.out, carrying_id), "hash "))
       << "the fallback paths are in its training data:\n" << refined_models.out;
   EXPECT_NE(ModelBlock(refined_models.out, refined_id)
-                .find("(" + std::to_string(fallback_paths) + " fallback paths, 20.0 % of the loss)"),
+                .find("(the walks 50.0 % of the recipe's loss; " + std::to_string(fallback_paths) +
+                      " fallback paths, 20.0 % of the loss)"),
             std::string::npos)
-      << "the model's record names its fallback paths:\n" << refined_models.out;
+      << "the model's record names its fallback paths:\n"
+      << refined_models.out;
+  EXPECT_NE(LineAfter(ModelBlock(refined_models.out, refined_id), "training:")
+                .find(" weighted_histories=" + std::to_string(4 + fallback_paths)),
+            std::string::npos)
+      << "the 4 walks and every fallback path weighed:\n"
+      << refined_models.out;
   std::cout << "  the fine-tuned model's data:"
             << LineAfter(ModelBlock(refined_models.out, refined_id), "data:") << "\n";
   EXPECT_EQ(ModelBlock(refined_models.out, carrying_id).find("fallback paths"), std::string::npos)

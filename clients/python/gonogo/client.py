@@ -399,7 +399,7 @@ class Client:
         """Trains and registers a surrogate model of `soil`'s RVE as a job on the server's pool (a
         Job; its model() once done). `fields`: the other pb.TrainSurrogateRequest fields
         (hidden_widths, from_model, members, epochs, walks, rig_load_n, carried_variables,
-        fallback_paths_share, floor_packings, ...)."""
+        walk_share, fallback_paths_share, floor_packings, pressure_reference_pa, ...)."""
         request = _message_from(dict(fields, soil_name=soil), pb.TrainSurrogateRequest, "train")
         return Job(self, _call(self._stub.TrainSurrogate, request, metadata=self._metadata))
 

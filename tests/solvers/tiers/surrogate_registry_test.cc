@@ -72,6 +72,7 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   RegisteredSurrogate fine_tuned = Record("sand-a", "sand", 0.05, 1000);
   fine_tuned.fallback_paths = 7;
   fine_tuned.fallback_paths_share = 0.2;
+  fine_tuned.walk_share = 0.6;
   // The floor under the triaxial's error: that path on two other packings of the RVE.
   fine_tuned.held_out[0].packings = {{2, 0.125}, {3, 0.0625}};
   const RegisteredSurrogate a = registry.Register(fine_tuned, Ensemble());
@@ -88,6 +89,8 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(described->training, "epochs=60 batch_size=64");
   EXPECT_EQ(described->fallback_paths, 7);
   EXPECT_EQ(described->fallback_paths_share, 0.2);
+  EXPECT_EQ(described->walk_share, 0.6);
+  EXPECT_EQ(registry.Describe("sand-b")->walk_share, 0);
   EXPECT_EQ(registry.Describe("sand-b")->fallback_paths, 0);
   EXPECT_EQ(described->distance_threshold, 12.5);
   EXPECT_EQ(described->tensile_limit_pa, 12.0);
@@ -118,6 +121,22 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
   EXPECT_EQ(registry.List("sand").size(), 3u);
 
   EXPECT_EQ(registry.NewId("seed000 sand", "mlp-8"), "seed000-sand-mlp-8-1");
+  // An architecture that would make the id too long is named in its short form; one that even
+  // then would is cut after a whole word (the record keeps the whole name).
+  EXPECT_EQ(
+      registry.NewId("seed000_sand_rve100", "mlp-128x128-tanh-anchored-pressure-scaled-3000pa"),
+      "seed000_sand_rve100-mlp-128x128-anchored-ps3000pa-1");
+  EXPECT_EQ(registry.NewId("seed000_sand_rve100",
+                           "mlp-128x128-tanh-anchored-pressure-scaled-3000pa-carrying-"
+                           "coordination_number+solid_fraction"),
+            "seed000_sand_rve100-mlp-128x128-anchored-ps3000pa-cn-sf-1");
+  EXPECT_EQ(registry.NewId("seed000_sand_rve100",
+                           "mlp-64x64x64x64x64x64-tanh-anchored-carrying-"
+                           "fabric_xx+fabric_yy+fabric_zz+fabric_xy"),
+            "seed000_sand_rve100-mlp-64x64x64x64x64x64-anchored-fxx-1");
+  EXPECT_EQ(registry.NewId("seed000_sand_rve100", "mlp-128x128-tanh-anchored"),
+            "seed000_sand_rve100-mlp-128x128-tanh-anchored-1")
+      << "an id within the limit keeps the whole name";
   EXPECT_FALSE(registry.Find("no-such").has_value());
   EXPECT_FALSE(registry.Find("../sand-a").has_value());
 }
@@ -188,31 +207,34 @@ TEST_F(SurrogateRegistryTest, RefusesMalformedAndTakenIds) {
 }
 
 // A record written before a field existed reads as that field's "none": no fallback paths, no
-// cap, no cone.
+// cap, no cone, no training line, no walk share.
 TEST_F(SurrogateRegistryTest, ReadsARecordMadeBeforeItsLaterFields) {
   const SurrogateRegistry registry(root_.string());
   RegisteredSurrogate record = Record("old", "sand", 0.05, 1000);
   record.fallback_paths = 3;
   record.fallback_paths_share = 0.1;
+  record.walk_share = 0.6;
   registry.Register(record, Ensemble());
   const fs::path file = root_ / "old" / "model.txt";
   std::ifstream in(file);
   std::string kept, line;
   int dropped = 0;
   while (std::getline(in, line)) {
-    const bool later =
-        line.rfind("fallback_paths", 0) == 0 || line.rfind("tensile_limit_pa", 0) == 0 ||
-        line.rfind("least_principal_ratio", 0) == 0 || line.rfind("training = ", 0) == 0;
+    const bool later = line.rfind("fallback_paths", 0) == 0 ||
+                       line.rfind("tensile_limit_pa", 0) == 0 ||
+                       line.rfind("least_principal_ratio", 0) == 0 ||
+                       line.rfind("training = ", 0) == 0 || line.rfind("walk_share = ", 0) == 0;
     dropped += later;
     if (!later) kept += line + "\n";
   }
   in.close();
-  ASSERT_EQ(dropped, 5) << "the record's later fields were not where this test looks";
+  ASSERT_EQ(dropped, 6) << "the record's later fields were not where this test looks";
   std::ofstream(file) << kept;
   const std::optional<RegisteredSurrogate> old = registry.Describe("old");
   ASSERT_TRUE(old.has_value());
   EXPECT_EQ(old->fallback_paths, 0);
   EXPECT_EQ(old->fallback_paths_share, 0);
+  EXPECT_EQ(old->walk_share, 0);
   EXPECT_TRUE(std::isinf(old->tensile_limit_pa));
   EXPECT_EQ(old->least_principal_ratio, 0);
   EXPECT_EQ(old->training, "");
