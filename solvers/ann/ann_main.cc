@@ -9,7 +9,9 @@
 // pressures, another seed), on OpenMP threads, one path per thread. Trains an ensemble per MLP --architecture (one network per
 // GRU: gru32) and prints, per
 // architecture, the training figures, each held-out path's replay error (the stress error
-// relative to the path's mean |sigma|) and the evaluation cost. With --out, writes the histories
+// relative to the path's mean |sigma|) and the evaluation cost; with --rig-load-n, each held-out
+// rig path also as the fe-ann tier answers its point (tiers::ReplayGuarded: the RVE from where the
+// ensemble flags). With --out, writes the histories
 // (training.npy, held_out.npy with their .columns.txt) and each ensemble (DIR/<architecture>/).
 #include <CLI/CLI.hpp>
 #include <omp.h>
@@ -313,6 +315,9 @@ struct Study {
   std::vector<std::vector<tiers::PackingDifference>> held_out_packings;
   std::map<double, FeDeReference> references;  // fe-de curves by load
   std::string data_hash;                       // of `training` (HistoriesHash)
+  // The soil's RVE, and where the held-out rig paths begin in `held_out` (its size: none).
+  std::shared_ptr<const dem::rve::RveMaterial> rve;
+  std::size_t first_rig_held_out = 0;
 };
 
 // One trained ensemble's row (training figures, held-out errors, evaluation cost), then, as asked,
@@ -342,6 +347,23 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000, ensemble.carried_variables());
   std::printf("%.2f\n",
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
+  // The held-out rig paths as the tier answers their points: the RVE where the ensemble flags.
+  for (std::size_t k = study.first_rig_held_out; k < study.held_out.size(); ++k) {
+    const tiers::GuardedReplay guarded =
+        tiers::ReplayGuarded(ensemble, study.rve, study.held_out[k], line.return_after_steps);
+    std::printf("# %s: %s, as the fe-ann tier answers its point %.2f %% (", name.c_str(),
+                study.held_out_names[k].c_str(), 100 * guarded.error);
+    if (guarded.fallbacks == 0) {
+      std::printf("no fallback");
+    } else {
+      std::printf("fell back after %lld of %zu increments, %d fallbacks, %lld returns",
+                  static_cast<long long>(guarded.first_fallback_step), study.held_out[k].steps(),
+                  guarded.fallbacks, static_cast<long long>(guarded.returns));
+    }
+    std::printf("%s%s); open-loop %.2f %%\n",
+                guarded.stopped_reason.empty() ? "" : ", stopped: ", guarded.stopped_reason.c_str(),
+                100 * held_out_errors[k]);
+  }
   const double ratio = ensemble.envelope().least_principal_ratio;
   std::printf("# %s: principal stresses capped at %g Pa (the training data's most tensile) and "
               "kept within the cone min/max principal compression >= %.3f (friction angle "
@@ -618,7 +640,9 @@ int Run(const CommandLine& line) {
               held_out_names,
               held_out_packings,
               references,
-              tiers::HistoriesHash(training_all)};
+              tiers::HistoriesHash(training_all),
+              rve,
+              held_out.size()};
   std::vector<double> history_weights;
   if (line.walk_share > 0) {
     // Walks and the rest weighed so that the walks' steps carry walk_share of the loss (the rig's

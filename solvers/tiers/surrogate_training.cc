@@ -7,10 +7,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "solvers/ann/ann_material.h"
 #include "solvers/ann/path_recorder.h"
 #include "solvers/common/errors.h"
 #include "solvers/dem/rve/rve_material.h"
 #include "solvers/dem/rve/rve_soil.h"
+#include "solvers/material/kinematics.h"
 
 namespace gonogo::tiers {
 
@@ -218,6 +220,41 @@ ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rv
   Require(replayed.size() == 1, "path", "the RVE took none of its increments: " + stopped_reason);
   replayed.front().stopped_reason = stopped_reason;
   return std::move(replayed.front());
+}
+
+GuardedReplay ReplayGuarded(const ann::SurrogateEnsemble& ensemble,
+                            std::shared_ptr<const dem::rve::RveMaterial> rve,
+                            const ann::StrainHistory& path, int return_after_steps) {
+  Require(path.steps() > 0, "path", "has no steps to replay");
+  const double initial_mean_pa = -path.initial_stress_pa.trace() / 3;  // tension positive
+  Require(initial_mean_pa > 0, "path", "starts from a mean stress that is not compressive");
+  ann::AnnMaterialOptions options;  // as FeAnnTier::Run makes its points' material
+  options.return_after_steps = return_after_steps;
+  options.internal_variables = RveFabricVariables();
+  // The material lives only in this call: it holds the caller's ensemble without owning it.
+  const ann::AnnMaterial material(std::shared_ptr<const ann::SurrogateEnsemble>(
+                                      &ensemble, [](const ann::SurrogateEnsemble*) {}),
+                                  rve, options);
+  dem::rve::Rve settled = rve->initial();
+  settled.SettleIsotropic(initial_mean_pa);
+  std::unique_ptr<material::MaterialState> state = material.StateFrom(settled.Save());
+  GuardedReplay replay;
+  for (const material::Matrix3& increment : path.increments) {
+    std::vector<material::PointResponse> response =
+        material.Update({{increment, state.get()}}, false);
+    if (response.front().status != material::UpdateStatus::kOk) {
+      replay.stopped_reason = response.front().reason;
+      break;
+    }
+    replay.stresses_pa.push_back(material::StressToVoigt(response.front().stress_pa));
+    state = std::move(response.front().state);
+  }
+  replay.error = ann::ReplayError(replay.stresses_pa, path);
+  const std::vector<ann::FallbackLog::Event> fallbacks = material.log().fallbacks();
+  replay.fallbacks = static_cast<int>(fallbacks.size());
+  if (!fallbacks.empty()) replay.first_fallback_step = fallbacks.front().point_step;
+  replay.returns = material.log().returns();
+  return replay;
 }
 
 CurveDifference WorstDifference(const TractionCurve& a, const TractionCurve& b,

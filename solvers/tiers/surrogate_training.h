@@ -143,6 +143,26 @@ ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rv
                                  const ann::StrainHistory& path,
                                  const ann::InternalVariables& internal = {});
 
+// A recorded point's path answered as the fe-ann tier answers its point (fe_ann_tier.h): by an
+// ann::AnnMaterial of `ensemble` with `rve` as its fallback, the point started where
+// ReplayedOnRve starts it (the template settled isotropically at the path's initial mean stress,
+// StateFrom), then the path's increments, one update each. Where the ensemble flags an increment
+// the point falls back: the RVE replays its increments from that start and answers from then on
+// (until `return_after_steps` unflagged increments in a row bring it back, when > 0). The open-loop
+// replay (ann::Replay) answers every step by the network, flagged or not; this is what a curve's
+// point gets. Stops at the first increment the material refuses (stopped_reason).
+struct GuardedReplay {
+  std::vector<ann::Vector6> stresses_pa;  // after each step taken
+  double error = 0;                       // ann::ReplayError against the path
+  std::int64_t first_fallback_step = -1;  // increments taken before the first fallback; -1: none
+  int fallbacks = 0;
+  std::int64_t returns = 0;
+  std::string stopped_reason;
+};
+GuardedReplay ReplayGuarded(const ann::SurrogateEnsemble& ensemble,
+                            std::shared_ptr<const dem::rve::RveMaterial> rve,
+                            const ann::StrainHistory& path, int return_after_steps = 0);
+
 // The largest differences between two curves of the same request over their common slips: drawbar
 // pull over the wheel load W, torque over r W, sinkage over r (r = d / 2): the measures of
 // fe-ann against fe-de.

@@ -669,5 +669,53 @@ TEST_F(FeAnnTierTest, ARigPathReplayedOnItsOwnPackingIsThePathAndOnAnotherItsFlo
   }
 }
 
+// A rig point's path answered as the tier answers its point (ReplayGuarded). With every increment
+// flagged the point falls back at its first and its RVE answers the whole path, as ReplayedOnRve
+// replays it, bit for bit. With none flagged the network answers every step, as the open-loop
+// replay does, but from the settled RVE's stress and coordination number rather than the path's
+// recorded ones: measured, the two errors differ by far less than either.
+TEST_F(FeAnnTierTest, ARigPathAnsweredAsTheTierAnswersItsPointIsTheRvesWhereFlagged) {
+  const SoilParameters soil =
+      BuiltinSoilCatalogue().Find(kSoil, dem::rve::kRveSoilModel)->parameters;
+  const auto rve = dem::rve::SharedRveMaterial(
+      dem::rve::RveMaterialParamsFromSoil(soil, TinyFeDeOptions().numerics, "soil"));
+  // The rig's path with the coordination number the model carries (its replay on its own packing).
+  const ann::StrainHistory path = ReplayedOnRve(rve, EvenlySpread(RecordedFeDeRun().paths, 3, 1)[1],
+                                                RveVariables({"coordination_number"}, "carried"));
+  const ann::SurrogateEnsemble model = ann::SurrogateEnsemble::Load(*directory_ + "/model");
+
+  ann::SurrogateEnsemble flag_all = ann::SurrogateEnsemble::Load(*directory_ + "/model");
+  flag_all.SetThresholds(1e-12, 1e-12);
+  const GuardedReplay on_rve = ReplayGuarded(flag_all, rve, path);
+  EXPECT_EQ(on_rve.first_fallback_step, 0);
+  EXPECT_EQ(on_rve.fallbacks, 1);
+  EXPECT_TRUE(on_rve.stopped_reason.empty()) << on_rve.stopped_reason;
+  const ann::StrainHistory replayed = ReplayedOnRve(rve, path);
+  ASSERT_EQ(on_rve.stresses_pa.size(), replayed.steps());
+  for (std::size_t k = 0; k < replayed.steps(); ++k) {
+    ASSERT_EQ(on_rve.stresses_pa[k], replayed.stresses_pa[k]) << "step " << k;
+  }
+  EXPECT_EQ(on_rve.error, ann::HistoryDifference(replayed, path));
+
+  ann::SurrogateEnsemble flag_none = ann::SurrogateEnsemble::Load(*directory_ + "/model");
+  flag_none.SetThresholds(1e30, 1e30);
+  const GuardedReplay on_network = ReplayGuarded(flag_none, rve, path);
+  EXPECT_EQ(on_network.fallbacks, 0);
+  EXPECT_EQ(on_network.first_fallback_step, -1);
+  ASSERT_EQ(on_network.stresses_pa.size(), path.steps());
+  const double open_loop = ann::ReplayError(model, path);
+  std::cout << "  rig path of " << path.steps() << " steps: open-loop " << 100 * open_loop
+            << " %, the network from the settled RVE " << 100 * on_network.error << " %, the RVE "
+            << 100 * on_rve.error << " %\n";
+  EXPECT_NEAR(on_network.error, open_loop, 0.2 * open_loop);
+  EXPECT_GT(std::abs(on_network.error - on_rve.error), 0.0) << "two answers, not one";
+
+  // At the model's own thresholds, what the tier's point gets: printed for the README.
+  const GuardedReplay guarded = ReplayGuarded(model, rve, path);
+  std::cout << "  at the model's thresholds: " << 100 * guarded.error << " %, " << guarded.fallbacks
+            << " fallbacks, the first after " << guarded.first_fallback_step << " increments\n";
+  EXPECT_EQ(guarded.stresses_pa.size(), path.steps()) << guarded.stopped_reason;
+}
+
 }  // namespace
 }  // namespace gonogo::tiers
