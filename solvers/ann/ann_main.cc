@@ -347,22 +347,37 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   const std::vector<SurrogateInput> batch = TimingBatch(study.training, 1000, ensemble.carried_variables());
   std::printf("%.2f\n",
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
-  // The held-out rig paths as the tier answers their points: the RVE where the ensemble flags.
-  for (std::size_t k = study.first_rig_held_out; k < study.held_out.size(); ++k) {
-    const tiers::GuardedReplay guarded =
-        tiers::ReplayGuarded(ensemble, study.rve, study.held_out[k], line.return_after_steps);
-    std::printf("# %s: %s, as the fe-ann tier answers its point %.2f %% (", name.c_str(),
-                study.held_out_names[k].c_str(), 100 * guarded.error);
-    if (guarded.fallbacks == 0) {
-      std::printf("no fallback");
-    } else {
-      std::printf("fell back after %lld of %zu increments, %d fallbacks, %lld returns",
-                  static_cast<long long>(guarded.first_fallback_step), study.held_out[k].steps(),
-                  guarded.fallbacks, static_cast<long long>(guarded.returns));
+  // The held-out rig paths as the tier answers their points: the RVE where the ensemble flags, at
+  // each spread threshold validated (--validate-spread-scales; the model's own distance threshold).
+  for (double spread_scale : line.validate_spread_scales) {
+    std::optional<SurrogateEnsemble> rescaled;  // thresholds are the ensemble's: a copy of it
+    if (spread_scale != 1.0 && study.first_rig_held_out < study.held_out.size()) {
+      const std::string copy_directory =
+          (std::filesystem::temp_directory_path() /
+           ("gonogo_ann_guard_" + std::to_string(::getpid()) + "_" + name))
+              .string();
+      ensemble.Save(copy_directory);
+      rescaled = SurrogateEnsemble::Load(copy_directory);
+      std::filesystem::remove_all(copy_directory);
+      rescaled->SetThresholds(ensemble.distance_threshold(),
+                              spread_scale * ensemble.spread_threshold());
     }
-    std::printf("%s%s); open-loop %.2f %%\n",
-                guarded.stopped_reason.empty() ? "" : ", stopped: ", guarded.stopped_reason.c_str(),
-                100 * held_out_errors[k]);
+    for (std::size_t k = study.first_rig_held_out; k < study.held_out.size(); ++k) {
+      const tiers::GuardedReplay guarded = tiers::ReplayGuarded(
+          rescaled ? *rescaled : ensemble, study.rve, study.held_out[k], line.return_after_steps);
+      std::printf(
+          "# %s: %s, as the fe-ann tier answers its point (spread threshold x %g) %.2f %% (",
+          name.c_str(), study.held_out_names[k].c_str(), spread_scale, 100 * guarded.error);
+      if (guarded.fallbacks == 0) {
+        std::printf("no fallback");
+      } else {
+        std::printf("fell back after %lld of %zu increments, %d fallbacks, %lld returns",
+                    static_cast<long long>(guarded.first_fallback_step), study.held_out[k].steps(),
+                    guarded.fallbacks, static_cast<long long>(guarded.returns));
+      }
+      std::printf("%s%s); open-loop %.2f %%\n", guarded.stopped_reason.empty() ? "" : ", stopped: ",
+                  guarded.stopped_reason.c_str(), 100 * held_out_errors[k]);
+    }
   }
   const double ratio = ensemble.envelope().least_principal_ratio;
   std::printf("# %s: principal stresses capped at %g Pa (the training data's most tensile) and "
