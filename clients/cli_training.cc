@@ -31,8 +31,9 @@ std::string Percent(double fraction) {
 // of the recipe's loss; 37 fallback paths, 20.0 % of the loss)", "" when nothing was weighed.
 std::string DataShares(const v1::SurrogateModel& m) {
   std::vector<std::string> parts;
-  if (m.walk_share() > 0)
+  if (m.walk_share() > 0) {
     parts.push_back("the walks " + Percent(m.walk_share()) + " of the recipe's loss");
+  }
   if (m.fallback_paths() > 0) {
     parts.push_back(std::to_string(m.fallback_paths()) + " fallback paths, " +
                     Percent(m.fallback_paths_share()) + " of the loss");

@@ -349,16 +349,20 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
               MicrosecondsPerPoint(batch.size(), [&] { ensemble.Answer(batch, false); }));
   // The held-out rig paths as the tier answers their points: the RVE where the ensemble flags, at
   // each spread threshold validated (--validate-spread-scales; the model's own distance threshold).
+  // The thresholds are the ensemble's own, so they are set on one copy of it, read back once.
+  std::optional<SurrogateEnsemble> rescaled;
+  if (study.first_rig_held_out < study.held_out.size() &&
+      line.validate_spread_scales != std::vector<double>{1.0}) {
+    const std::string copy_directory =
+        (std::filesystem::temp_directory_path() /
+         ("gonogo_ann_guard_" + std::to_string(::getpid()) + "_" + name))
+            .string();
+    ensemble.Save(copy_directory);
+    rescaled = SurrogateEnsemble::Load(copy_directory);
+    std::filesystem::remove_all(copy_directory);
+  }
   for (double spread_scale : line.validate_spread_scales) {
-    std::optional<SurrogateEnsemble> rescaled;  // thresholds are the ensemble's: a copy of it
-    if (spread_scale != 1.0 && study.first_rig_held_out < study.held_out.size()) {
-      const std::string copy_directory =
-          (std::filesystem::temp_directory_path() /
-           ("gonogo_ann_guard_" + std::to_string(::getpid()) + "_" + name))
-              .string();
-      ensemble.Save(copy_directory);
-      rescaled = SurrogateEnsemble::Load(copy_directory);
-      std::filesystem::remove_all(copy_directory);
+    if (rescaled) {
       rescaled->SetThresholds(ensemble.distance_threshold(),
                               spread_scale * ensemble.spread_threshold());
     }

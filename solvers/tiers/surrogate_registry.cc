@@ -259,8 +259,9 @@ std::optional<SurrogateModelRecord> SurrogateRegistry::Best(const std::string& s
 std::string SurrogateRegistry::NewId(const std::string& soil_name,
                                      const std::string& architecture) const {
   std::string stem = IdCharacters(soil_name + "-" + architecture);
-  if (stem.size() > kIdStemChars)
+  if (stem.size() > kIdStemChars) {
     stem = IdCharacters(soil_name + "-" + ShortArchitecture(architecture));
+  }
   if (stem.size() > kIdStemChars) {  // still too long: cut after a whole word
     const std::size_t last_dash = stem.rfind('-', kIdStemChars);
     stem.resize(last_dash != std::string::npos && last_dash > 0 ? last_dash : kIdStemChars);

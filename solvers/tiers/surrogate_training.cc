@@ -40,6 +40,18 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
+// The bytes of `rve`'s template settled isotropically at `path`'s initial mean stress, where a
+// replay of the path starts (as the fe-de bin settles a point at the stress of its depth). Throws
+// InputError("path", ...) for a path without steps or whose initial mean stress is not compressive.
+std::string SettledAtPathStart(const dem::rve::RveMaterial& rve, const ann::StrainHistory& path) {
+  Require(path.steps() > 0, "path", "has no steps to replay");
+  const double initial_mean_pa = -path.initial_stress_pa.trace() / 3;  // tension positive
+  Require(initial_mean_pa > 0, "path", "starts from a mean stress that is not compressive");
+  dem::rve::Rve settled = rve.initial();
+  settled.SettleIsotropic(initial_mean_pa);
+  return settled.Save();
+}
+
 }  // namespace
 
 SurrogateRecipe::SurrogateRecipe() {
@@ -198,14 +210,9 @@ RecordedRigRun RecordRigPaths(const FeDeTier& fe_de, const TractionRequest& requ
 ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rve,
                                  const ann::StrainHistory& path,
                                  const ann::InternalVariables& internal) {
-  Require(path.steps() > 0, "path", "has no steps to replay");
-  // Tension positive: the mean compressive stress the point started from.
-  const double initial_mean_pa = -path.initial_stress_pa.trace() / 3;
-  Require(initial_mean_pa > 0, "path", "starts from a mean stress that is not compressive");
-  dem::rve::Rve settled = rve->initial();
-  settled.SettleIsotropic(initial_mean_pa);
+  const std::string settled = SettledAtPathStart(*rve, path);
   const ann::PathRecorder recorder(rve, internal);
-  std::unique_ptr<material::MaterialState> state = recorder.RestoreState(settled.Save());
+  std::unique_ptr<material::MaterialState> state = recorder.RestoreState(settled);
   std::string stopped_reason;
   for (const material::Matrix3& increment : path.increments) {
     std::vector<material::PointResponse> response =
@@ -225,9 +232,7 @@ ann::StrainHistory ReplayedOnRve(std::shared_ptr<const dem::rve::RveMaterial> rv
 GuardedReplay ReplayGuarded(const ann::SurrogateEnsemble& ensemble,
                             std::shared_ptr<const dem::rve::RveMaterial> rve,
                             const ann::StrainHistory& path, int return_after_steps) {
-  Require(path.steps() > 0, "path", "has no steps to replay");
-  const double initial_mean_pa = -path.initial_stress_pa.trace() / 3;  // tension positive
-  Require(initial_mean_pa > 0, "path", "starts from a mean stress that is not compressive");
+  const std::string settled = SettledAtPathStart(*rve, path);
   ann::AnnMaterialOptions options;  // as FeAnnTier::Run makes its points' material
   options.return_after_steps = return_after_steps;
   options.internal_variables = RveFabricVariables();
@@ -235,9 +240,7 @@ GuardedReplay ReplayGuarded(const ann::SurrogateEnsemble& ensemble,
   const ann::AnnMaterial material(std::shared_ptr<const ann::SurrogateEnsemble>(
                                       &ensemble, [](const ann::SurrogateEnsemble*) {}),
                                   rve, options);
-  dem::rve::Rve settled = rve->initial();
-  settled.SettleIsotropic(initial_mean_pa);
-  std::unique_ptr<material::MaterialState> state = material.StateFrom(settled.Save());
+  std::unique_ptr<material::MaterialState> state = material.StateFrom(settled);
   GuardedReplay replay;
   for (const material::Matrix3& increment : path.increments) {
     std::vector<material::PointResponse> response =
