@@ -45,11 +45,13 @@ Command AddDatasetCommand(CLI::App& parent);
 
 // The fe-ann surrogate options that `gonogo curve` and `gonogo map` share (cli_training.cc), in
 // the group "Surrogate (fe-ann)": --model ID, and the request's guard over the server's:
-// --distance-threshold D, --spread-threshold S, --fallback on|off, --return-after-steps N.
+// --distance-threshold D, --spread-threshold S, --pressure-floor-kpa P, --fallback on|off,
+// --return-after-steps N.
 struct SurrogateOptions {
   std::string model;  // empty: the soil's best
   std::optional<double> distance_threshold;
   std::optional<double> spread_threshold;
+  std::optional<double> pressure_floor_kpa;
   std::string fallback;  // "on", "off", or empty: the server's
   std::optional<int> return_after_steps;
 };

@@ -352,6 +352,11 @@ void AddSurrogateOptions(CLI::App& app, SurrogateOptions* o, const std::string& 
                  "model's own; default: the server's")
       ->type_name("S")
       ->group(group);
+  app.add_option("--pressure-floor-kpa", o->pressure_floor_kpa,
+                 "flag a point whose mean compression is below P kPa (the network not trusted "
+                 "there); 0: no floor; default: the server's")
+      ->type_name("P")
+      ->group(group);
   app.add_option("--fallback", o->fallback,
                  "on: a flagged point is answered by the soil's RVE; off: by the network, and "
                  "counted; default: the server's")
@@ -369,6 +374,7 @@ v1::SurrogateGuard GuardFromOptions(const SurrogateOptions& o) {
   v1::SurrogateGuard guard;
   if (o.distance_threshold) guard.set_distance_threshold(*o.distance_threshold);
   if (o.spread_threshold) guard.set_spread_threshold(*o.spread_threshold);
+  if (o.pressure_floor_kpa) guard.set_pressure_floor_pa(1e3 * *o.pressure_floor_kpa);
   if (!o.fallback.empty()) guard.set_fallback_enabled(o.fallback == "on");
   if (o.return_after_steps) guard.set_return_after_steps(*o.return_after_steps);
   return guard;

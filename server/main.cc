@@ -151,6 +151,16 @@ Options Parse(int argc, char** argv) {
                  "fe-ann: relative spread of a model's members beyond which a point is flagged; "
                  "0: each model's own")
       ->check(CLI::Range(0.0, 1e12));
+  app.add_option(
+         "--fe-ann-pressure-floor-kpa",
+         [&o](const CLI::results_t& values) {
+           o.tier_options.fe_ann_pressure_floor_pa = 1e3 * std::stod(values.front());
+           return true;
+         },
+         "fe-ann: mean compression below which a point is flagged (the network not trusted "
+         "there), kPa; 0: no floor")
+      ->type_name("KPA")
+      ->check(CLI::Range(0.0, 1e9));
   auto* fe_ann_return = app.add_option("--fe-ann-return-after-steps", o.tier_options.fe_ann_return_after_steps,
                  "fe-ann: a fallen-back point returns to the network after this many FE steps in "
                  "a row that would not have been flagged; 0: it stays on its RVE")

@@ -66,6 +66,7 @@ SurrogateGuard FromProto(const v1::SurrogateGuard& p) {
   SurrogateGuard g;
   if (p.has_distance_threshold()) g.distance_threshold = p.distance_threshold();
   if (p.has_spread_threshold()) g.spread_threshold = p.spread_threshold();
+  if (p.has_pressure_floor_pa()) g.pressure_floor_pa = p.pressure_floor_pa();
   if (p.has_fallback_enabled()) g.fallback_enabled = p.fallback_enabled();
   if (p.has_return_after_steps()) g.return_after_steps = p.return_after_steps();
   return g;
@@ -75,6 +76,7 @@ v1::SurrogateGuard ToProto(const SurrogateGuard& g) {
   v1::SurrogateGuard p;
   if (g.distance_threshold) p.set_distance_threshold(*g.distance_threshold);
   if (g.spread_threshold) p.set_spread_threshold(*g.spread_threshold);
+  if (g.pressure_floor_pa) p.set_pressure_floor_pa(*g.pressure_floor_pa);
   if (g.fallback_enabled) p.set_fallback_enabled(*g.fallback_enabled);
   if (g.return_after_steps) p.set_return_after_steps(*g.return_after_steps);
   return p;

@@ -64,6 +64,7 @@ struct CommandLine {
   std::vector<double> validate_loads_n;
   // --validate-load-n's runs at each of these multiples of the model's spread threshold.
   std::vector<double> validate_spread_scales = {1.0};
+  std::vector<double> validate_pressure_floors_kpa = {0.0};
   std::string register_data_dir;  // non-empty: register each MLP ensemble there
   std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
   double rest_kpa = 0;            // > 0: only the rest test at this pressure
@@ -268,39 +269,42 @@ void Validate(const CommandLine& line, const std::string& model_directory,
   const tiers::FeDeOptions fe_de_options = tiers::FeDeOptions::Preset(line.preset);
   const tiers::FeDeTier fe_de(fe_de_options);
   for (double spread_scale : line.validate_spread_scales) {
-    tiers::FeAnnOptions options;
-    options.fe_de = fe_de_options;
-    options.return_after_steps = line.return_after_steps;
-    // 1: the model's own (0 in the options); the envelope's distance threshold stays the model's.
-    options.spread_threshold = spread_scale == 1.0 ? 0.0 : spread_scale * model_spread_threshold;
-    const tiers::FeAnnTier fe_ann(options, models);
-    for (double load_n : line.validate_loads_n) {
-      const TractionRequest request = RigRequest(line, load_n);
-      if (references.count(load_n) == 0) {
+    for (double pressure_floor_kpa : line.validate_pressure_floors_kpa) {
+      tiers::FeAnnOptions options;
+      options.fe_de = fe_de_options;
+      options.return_after_steps = line.return_after_steps;
+      // 1: the model's own (0 in the options); the envelope's distance threshold stays the model's.
+      options.spread_threshold = spread_scale == 1.0 ? 0.0 : spread_scale * model_spread_threshold;
+      options.pressure_floor_pa = 1e3 * pressure_floor_kpa;
+      const tiers::FeAnnTier fe_ann(options, models);
+      for (double load_n : line.validate_loads_n) {
+        const TractionRequest request = RigRequest(line, load_n);
+        if (references.count(load_n) == 0) {
+          const auto start = std::chrono::steady_clock::now();
+          references[load_n].run = fe_de.Run(request, {});
+          references[load_n].seconds = Since(start);
+        }
+        const FeDeReference& reference = references[load_n];
         const auto start = std::chrono::steady_clock::now();
-        references[load_n].run = fe_de.Run(request, {});
-        references[load_n].seconds = Since(start);
+        const tiers::AnnRunReport ann = fe_ann.Run(request, {});
+        const double seconds = Since(start);
+        const auto& a = ann.curve.points;
+        const auto& d = reference.run.curve.points;
+        const tiers::CurveDifference worst =
+            tiers::WorstDifference(ann.curve, reference.run.curve, request);
+        std::printf("validate,%s,%g,%g,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%lld,%.2f,%.2f,%.2f\n",
+                    architecture.c_str(), spread_scale, pressure_floor_kpa, load_n,
+                    reference.seconds, seconds, reference.seconds / seconds, ann.network_seconds,
+                    ann.fallback_seconds, ann.fallbacks, static_cast<long long>(ann.returns),
+                    static_cast<long long>(ann.stress_returns), 100 * worst.drawbar_pull_over_w,
+                    100 * worst.torque_over_rw, 100 * worst.sinkage_over_r);
+        for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
+          std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
+                      a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
+                      d[k].torque_nm, 1e3 * a[k].sinkage_m, 1e3 * d[k].sinkage_m);
+        }
+        std::fflush(stdout);
       }
-      const FeDeReference& reference = references[load_n];
-      const auto start = std::chrono::steady_clock::now();
-      const tiers::AnnRunReport ann = fe_ann.Run(request, {});
-      const double seconds = Since(start);
-      const auto& a = ann.curve.points;
-      const auto& d = reference.run.curve.points;
-      const tiers::CurveDifference worst =
-          tiers::WorstDifference(ann.curve, reference.run.curve, request);
-      std::printf("validate,%s,%g,%.0f,%.1f,%.2f,%.1f,%.2f,%.2f,%d,%lld,%lld,%.2f,%.2f,%.2f\n",
-                  architecture.c_str(), spread_scale, load_n, reference.seconds, seconds,
-                  reference.seconds / seconds, ann.network_seconds, ann.fallback_seconds,
-                  ann.fallbacks, static_cast<long long>(ann.returns),
-                  static_cast<long long>(ann.stress_returns), 100 * worst.drawbar_pull_over_w,
-                  100 * worst.torque_over_rw, 100 * worst.sinkage_over_r);
-      for (std::size_t k = 0; k < std::min(a.size(), d.size()); ++k) {
-        std::printf("#   s %.2f: D %.1f (fe-de %.1f) N, T %.2f (%.2f) N m, z %.2f (%.2f) mm\n",
-                    a[k].slip, a[k].drawbar_pull_n, d[k].drawbar_pull_n, a[k].torque_nm,
-                    d[k].torque_nm, 1e3 * a[k].sinkage_m, 1e3 * d[k].sinkage_m);
-      }
-      std::fflush(stdout);
     }
   }
 }
@@ -352,7 +356,8 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   // The thresholds are the ensemble's own, so they are set on one copy of it, read back once.
   std::optional<SurrogateEnsemble> rescaled;
   if (study.first_rig_held_out < study.held_out.size() &&
-      line.validate_spread_scales != std::vector<double>{1.0}) {
+      (line.validate_spread_scales != std::vector<double>{1.0} ||
+       line.validate_pressure_floors_kpa != std::vector<double>{0.0})) {
     const std::string copy_directory =
         (std::filesystem::temp_directory_path() /
          ("gonogo_ann_guard_" + std::to_string(::getpid()) + "_" + name))
@@ -362,25 +367,32 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
     std::filesystem::remove_all(copy_directory);
   }
   for (double spread_scale : line.validate_spread_scales) {
-    if (rescaled) {
-      rescaled->SetThresholds(ensemble.distance_threshold(),
-                              spread_scale * ensemble.spread_threshold());
-    }
-    for (std::size_t k = study.first_rig_held_out; k < study.held_out.size(); ++k) {
-      const tiers::GuardedReplay guarded = tiers::ReplayGuarded(
-          rescaled ? *rescaled : ensemble, study.rve, study.held_out[k], line.return_after_steps);
-      std::printf(
-          "# %s: %s, as the fe-ann tier answers its point (spread threshold x %g) %.2f %% (",
-          name.c_str(), study.held_out_names[k].c_str(), spread_scale, 100 * guarded.error);
-      if (guarded.fallbacks == 0) {
-        std::printf("no fallback");
-      } else {
-        std::printf("fell back after %lld of %zu increments, %d fallbacks, %lld returns",
-                    static_cast<long long>(guarded.first_fallback_step), study.held_out[k].steps(),
-                    guarded.fallbacks, static_cast<long long>(guarded.returns));
+    for (double pressure_floor_kpa : line.validate_pressure_floors_kpa) {
+      if (rescaled) {
+        rescaled->SetThresholds(ensemble.distance_threshold(),
+                                spread_scale * ensemble.spread_threshold());
+        rescaled->SetPressureFloor(1e3 * pressure_floor_kpa);
       }
-      std::printf("%s%s); open-loop %.2f %%\n", guarded.stopped_reason.empty() ? "" : ", stopped: ",
-                  guarded.stopped_reason.c_str(), 100 * held_out_errors[k]);
+      for (std::size_t k = study.first_rig_held_out; k < study.held_out.size(); ++k) {
+        const tiers::GuardedReplay guarded = tiers::ReplayGuarded(
+            rescaled ? *rescaled : ensemble, study.rve, study.held_out[k], line.return_after_steps);
+        std::printf(
+            "# %s: %s, as the fe-ann tier answers its point (spread threshold x %g, pressure "
+            "floor %g kPa) %.2f %% (",
+            name.c_str(), study.held_out_names[k].c_str(), spread_scale, pressure_floor_kpa,
+            100 * guarded.error);
+        if (guarded.fallbacks == 0) {
+          std::printf("no fallback");
+        } else {
+          std::printf("fell back after %lld of %zu increments, %d fallbacks, %lld returns",
+                      static_cast<long long>(guarded.first_fallback_step),
+                      study.held_out[k].steps(), guarded.fallbacks,
+                      static_cast<long long>(guarded.returns));
+        }
+        std::printf("%s%s); open-loop %.2f %%\n",
+                    guarded.stopped_reason.empty() ? "" : ", stopped: ",
+                    guarded.stopped_reason.c_str(), 100 * held_out_errors[k]);
+      }
     }
   }
   const double ratio = ensemble.envelope().least_principal_ratio;
@@ -434,7 +446,8 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
                          : line.out + "/" + name;
     if (line.out.empty()) ensemble.Save(directory);
     std::printf(
-        "validate,architecture,spread_scale,load_n,fe_de_s,fe_ann_s,speedup,network_s,"
+        "validate,architecture,spread_scale,pressure_floor_kpa,load_n,fe_de_s,fe_ann_s,speedup,"
+        "network_s,"
         "fallback_s,fallbacks,returns,stress_returns,worst_D_pct_W,worst_T_pct_rW,worst_z_pct_r\n");
     Validate(line, directory, name, ensemble.spread_threshold(), study.soil, study.references);
     if (line.out.empty()) std::filesystem::remove_all(directory);
@@ -791,6 +804,12 @@ int main(int argc, char** argv) {
                  "--validate-load-n's runs once at each of these multiples of the model's spread "
                  "threshold (below 1: more points fall back to the RVE)")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--validate-pressure-floors-kpa", line.validate_pressure_floors_kpa,
+                 "--validate-load-n's runs (and the held-out rig paths' guarded replays) once at "
+                 "each of these pressure floors, kPa: a point whose mean compression is below "
+                 "the floor falls back to the RVE (0: none)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--register", line.register_data_dir,
                  "register each MLP ensemble with its provenance in this gonogo-server data "

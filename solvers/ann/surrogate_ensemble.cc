@@ -235,6 +235,13 @@ void SurrogateEnsemble::SetThresholds(double distance_threshold, double spread_t
   spread_threshold_ = spread_threshold;
 }
 
+void SurrogateEnsemble::SetPressureFloor(double pressure_floor_pa) {
+  if (!(std::isfinite(pressure_floor_pa) && pressure_floor_pa >= 0)) {
+    throw InputError("pressure_floor_pa", "must be >= 0 Pa (0: no floor)");
+  }
+  pressure_floor_pa_ = pressure_floor_pa;
+}
+
 std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<SurrogateInput>& inputs,
                                                       bool want_tangent) const {
   std::vector<EnsembleAnswer> answers(inputs.size());
@@ -269,8 +276,10 @@ std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<Surrogat
         variance.cwiseSqrt().maxCoeff() /
         StressScale(inputs[n], answer.stress_increment_pa, envelope_.stress_floor_pa);
     answer.distance = envelope_.Distance(inputs[n]);
+    answer.mean_pressure_pa = -inputs[n].stress_pa.head<3>().mean();
     answer.out_of_distribution =
-        answer.distance > distance_threshold_ || answer.relative_spread > spread_threshold_;
+        answer.distance > distance_threshold_ || answer.relative_spread > spread_threshold_ ||
+        (pressure_floor_pa_ > 0 && answer.mean_pressure_pa < pressure_floor_pa_);
   }
   return answers;
 }

@@ -15,8 +15,14 @@
 //     spread over the training inputs. s_0 is a tenth of the training stresses' mean |sigma|: near
 //     zero stress the members disagree by a few Pa, which is nothing, not a large fraction of
 //     nothing.
-// Both thresholds can be set; the ensemble only flags, the material (ann_material.h) decides
-// what a flag does.
+//   - its mean compression p = -tr(sigma)/3 before the step is below `pressure_floor_pa` (0,
+//     the default: no floor). Both measures above judge one step by what the members say of it,
+//     and where the members drift alike along a path (a point near the surface, its stress a few
+//     kPa, where a step's error is tens of per cent of the stress) neither sees it; a floor says
+//     where the model's held-out errors show it is not to be trusted (solvers/ann/README.md,
+//     "A pressure floor").
+// The thresholds and the floor can be set; the ensemble only flags, the material
+// (ann_material.h) decides what a flag does.
 //
 // Admissible stresses: a stress the ensemble's answers build (sigma_{n+1} = R sigma_n R^T +
 // d_sigma) is capped, principal stress by principal stress, at the most tensile principal stress
@@ -80,6 +86,7 @@ struct EnsembleAnswer {
   Eigen::VectorXd internal_variable_increments;   // mean, of the carried variables
   double distance = 0;                            // from the training inputs
   double relative_spread = 0;                     // see above
+  double mean_pressure_pa = 0;                    // -tr(sigma)/3 before the step
   bool out_of_distribution = false;
 };
 
@@ -119,6 +126,9 @@ class SurrogateEnsemble {
   double spread_threshold() const { return spread_threshold_; }
   // Throws InputError(field, ...) for a threshold that is not positive.
   void SetThresholds(double distance_threshold, double spread_threshold);
+  double pressure_floor_pa() const { return pressure_floor_pa_; }
+  // Throws InputError("pressure_floor_pa", ...) for a floor that is negative or not finite.
+  void SetPressureFloor(double pressure_floor_pa);
   const InputEnvelope& envelope() const { return envelope_; }
   std::size_t size() const { return members_.size(); }
   const StressSurrogate& member(std::size_t k) const { return members_.at(k); }
@@ -141,6 +151,7 @@ class SurrogateEnsemble {
   InputEnvelope envelope_;
   double distance_threshold_ = 0;
   double spread_threshold_ = 0;
+  double pressure_floor_pa_ = 0;
 };
 
 // The ensemble's mean run along a history (Replay of stress_surrogate.h), its stresses kept

@@ -79,6 +79,8 @@ void SurrogateGuard::Validate(const std::string& p) const {
     Require(!value || (std::isfinite(*value) && *value >= 0), p + name,
             "must be a number >= 0 (0: the model's own)");
   }
+  Require(!pressure_floor_pa || (std::isfinite(*pressure_floor_pa) && *pressure_floor_pa >= 0),
+          p + "pressure_floor_pa", "must be a number of pascals >= 0 (0: no floor)");
   Require(!return_after_steps || *return_after_steps >= 0, p + "return_after_steps",
           "must be >= 0 (0: never)");
   Require(!return_after_steps || *return_after_steps == 0 || fallback_enabled.value_or(true),

@@ -76,6 +76,8 @@ struct SurrogateGuard {
   // The ensemble members' spread, relative to their mean stress, above which a point is flagged,
   // -; 0: the model's own.
   std::optional<double> spread_threshold;
+  // Mean compression -tr(sigma)/3 below which a point is flagged, Pa; 0: no floor.
+  std::optional<double> pressure_floor_pa;
   // true: a flagged point is answered by the soil's RVE; false: by the network, and counted.
   std::optional<bool> fallback_enabled;
   // A fallen-back point returns to the network after this many increments in a row the ensemble
@@ -83,7 +85,8 @@ struct SurrogateGuard {
   std::optional<int> return_after_steps;
 
   bool Empty() const {
-    return !distance_threshold && !spread_threshold && !fallback_enabled && !return_after_steps;
+    return !distance_threshold && !spread_threshold && !pressure_floor_pa && !fallback_enabled &&
+           !return_after_steps;
   }
   // Each field set is a valid value (errors name field_prefix + the field).
   void Validate(const std::string& field_prefix) const;

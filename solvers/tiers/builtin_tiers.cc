@@ -24,6 +24,7 @@ void RegisterBuiltinTiers(TierRegistry& registry, const BuiltinTierOptions& opti
   fe_ann.fe_de = fe_de;
   fe_ann.distance_threshold = options.fe_ann_distance_threshold;
   fe_ann.spread_threshold = options.fe_ann_spread_threshold;
+  fe_ann.pressure_floor_pa = options.fe_ann_pressure_floor_pa;
   fe_ann.fallback_enabled = options.fe_ann_fallback;
   fe_ann.return_after_steps = options.fe_ann_return_after_steps;
   std::shared_ptr<const tiers::SurrogateModelSource> models;

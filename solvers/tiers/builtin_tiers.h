@@ -21,6 +21,7 @@ struct BuiltinTierOptions {
   // so curves computed otherwise are cached apart.
   double fe_ann_distance_threshold = 0;
   double fe_ann_spread_threshold = 0;
+  double fe_ann_pressure_floor_pa = 0;  // mean compression below which a point is flagged; 0: none
   bool fe_ann_fallback = true;
   int fe_ann_return_after_steps = 0;  // 0: a fallen-back point stays on its RVE
 };

@@ -39,6 +39,11 @@ std::string VersionOf(const FeAnnOptions& options) {
                   options.spread_threshold);
     version += text;
   }
+  if (options.pressure_floor_pa > 0) {
+    char text[32];
+    std::snprintf(text, sizeof text, "-p%.4g", options.pressure_floor_pa);
+    version += text;
+  }
   if (options.return_after_steps > 0) {
     version += "-return" + std::to_string(options.return_after_steps);
   }
@@ -71,6 +76,8 @@ void FeAnnOptions::Validate(const std::string& p) const {
           "must be >= 0 (0: the model's own)");
   Require(std::isfinite(spread_threshold) && spread_threshold >= 0, p + "spread_threshold",
           "must be >= 0 (0: the model's own)");
+  Require(std::isfinite(pressure_floor_pa) && pressure_floor_pa >= 0, p + "pressure_floor_pa",
+          "must be >= 0 Pa (0: no floor)");
   Require(return_after_steps >= 0, p + "return_after_steps", "must be >= 0 (0: never)");
   Require(return_after_steps == 0 || fallback_enabled, p + "return_after_steps",
           "a point returns from its fallback, which is off");
@@ -95,6 +102,7 @@ FeAnnOptions FeAnnTier::OptionsFor(const TractionRequest& request,
   FeAnnOptions options = options_;
   if (guard.distance_threshold) options.distance_threshold = *guard.distance_threshold;
   if (guard.spread_threshold) options.spread_threshold = *guard.spread_threshold;
+  if (guard.pressure_floor_pa) options.pressure_floor_pa = *guard.pressure_floor_pa;
   if (guard.fallback_enabled) options.fallback_enabled = *guard.fallback_enabled;
   // A request that turns the fallback off has nothing to return from.
   if (!options.fallback_enabled && !guard.return_after_steps) options.return_after_steps = 0;
@@ -162,15 +170,16 @@ void FeAnnTier::ResolveChoices(TractionRequest& request, const std::string& pref
   const FeAnnOptions options = OptionsFor(request, prefix);
   request.surrogate_guard.distance_threshold = options.distance_threshold;
   request.surrogate_guard.spread_threshold = options.spread_threshold;
+  request.surrogate_guard.pressure_floor_pa = options.pressure_floor_pa;
   request.surrogate_guard.fallback_enabled = options.fallback_enabled;
   request.surrogate_guard.return_after_steps = options.return_after_steps;
 }
 
 std::shared_ptr<const ann::SurrogateEnsemble> FeAnnTier::Load(
     const SurrogateModelRecord& record, const FeAnnOptions& options) const {
-  char thresholds[64];
-  std::snprintf(thresholds, sizeof thresholds, "|%.17g|%.17g", options.distance_threshold,
-                options.spread_threshold);
+  char thresholds[96];
+  std::snprintf(thresholds, sizeof thresholds, "|%.17g|%.17g|%.17g", options.distance_threshold,
+                options.spread_threshold, options.pressure_floor_pa);
   const std::string name = record.id + thresholds;
   std::lock_guard<std::mutex> lock(loaded_mutex_);
   auto it = loaded_.find(name);
@@ -183,6 +192,7 @@ std::shared_ptr<const ann::SurrogateEnsemble> FeAnnTier::Load(
                             options.spread_threshold > 0 ? options.spread_threshold
                                                          : ensemble->spread_threshold());
   }
+  if (options.pressure_floor_pa > 0) ensemble->SetPressureFloor(options.pressure_floor_pa);
   loaded_[name] = ensemble;
   return ensemble;
 }

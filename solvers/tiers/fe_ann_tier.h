@@ -60,6 +60,9 @@ struct FeAnnOptions {
   // Flag thresholds (surrogate_ensemble.h); 0: the model's own.
   double distance_threshold = 0;
   double spread_threshold = 0;
+  // A point whose mean compression is below this is flagged (surrogate_ensemble.h), Pa; 0: no
+  // floor.
+  double pressure_floor_pa = 0;
   // A fallen-back point returns to the network after this many increments in a row the ensemble
   // would not have flagged (ann_material.h); 0: it stays on its RVE.
   int return_after_steps = 0;

@@ -181,6 +181,11 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_EQ(bad_guard_map.exit_code, 3) << bad_guard_map.out;
   EXPECT_NE(bad_guard_map.out.find("surrogate_guard.spread_threshold"), std::string::npos)
       << bad_guard_map.out;
+  const CliRun bad_floor_map = Gonogo(
+      server.endpoint(), map_args + (dir.path() / "map4").string() + " --pressure-floor-kpa -2");
+  EXPECT_EQ(bad_floor_map.exit_code, 3) << bad_floor_map.out;
+  EXPECT_NE(bad_floor_map.out.find("surrogate_guard.pressure_floor_pa"), std::string::npos)
+      << bad_floor_map.out;
   const CliRun bad_map =
       Gonogo(server.endpoint(), map_args + (dir.path() / "map2").string() + " --model no-such");
   EXPECT_EQ(bad_map.exit_code, 3) << bad_map.out;
@@ -189,15 +194,17 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
 
   ServerProcess guarded(data,
                         {"--fe-de-preset", "tiny", "--fe-ann-no-fallback",
-                         "--fe-ann-distance-threshold", "30"},
+                         "--fe-ann-distance-threshold", "30", "--fe-ann-pressure-floor-kpa", "4"},
                         2);
   const CliRun guarded_tiers = Gonogo(guarded.endpoint(), "tiers");
   ASSERT_EQ(guarded_tiers.exit_code, 0) << guarded_tiers.out;
-  EXPECT_NE(guarded_tiers.out.find("fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
+  EXPECT_NE(guarded_tiers.out.find("fe-ann (fe-ann-3-tiny-nofallback-d30-s0-p4000)"),
+            std::string::npos)
       << guarded_tiers.out;
   // Not the default guard's cached curve: the one the request's own guard computed on the first
-  // server, under the same version.
-  const CliRun unguarded = Gonogo(guarded.endpoint(), std::string(kWheel) + " --model " + id);
+  // server, under the same version (the request takes this server's floor away).
+  const CliRun unguarded = Gonogo(
+      guarded.endpoint(), std::string(kWheel) + " --model " + id + " --pressure-floor-kpa 0");
   ASSERT_EQ(unguarded.exit_code, 0) << unguarded.out;
   EXPECT_NE(unguarded.out.find("tier fe-ann (fe-ann-3-tiny-nofallback-d30-s0)"), std::string::npos)
       << unguarded.out;
@@ -205,8 +212,9 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
             std::string::npos)
       << unguarded.out;
   // A request sets the deployment's guard back to the model's own: the first server's curve.
-  const CliRun set_back = Gonogo(guarded.endpoint(), std::string(kWheel) +
-                                                         " --fallback on --distance-threshold 0");
+  const CliRun set_back =
+      Gonogo(guarded.endpoint(),
+             std::string(kWheel) + " --fallback on --distance-threshold 0 --pressure-floor-kpa 0");
   ASSERT_EQ(set_back.exit_code, 0) << set_back.out;
   EXPECT_NE(set_back.out.find("tier fe-ann (fe-ann-3-tiny),"), std::string::npos) << set_back.out;
   EXPECT_NE(set_back.out.find("from the cache"), std::string::npos) << set_back.out;
@@ -229,6 +237,11 @@ TEST(FeAnnService, RefusesAGuardItCannotKeep) {
                                     " --fe-ann-no-fallback --fe-ann-return-after-steps 10");
   EXPECT_EQ(no_return.exit_code, 2) << no_return.out;
   EXPECT_NE(no_return.out.find("--fe-ann-return-after-steps"), std::string::npos) << no_return.out;
+  const CliRun negative_floor = RunShell(BinaryDir() + "/server/gonogo-server --data-dir " +
+                                         dir.path().string() + " --fe-ann-pressure-floor-kpa -1");
+  EXPECT_EQ(negative_floor.exit_code, 2) << negative_floor.out;
+  EXPECT_NE(negative_floor.out.find("--fe-ann-pressure-floor-kpa"), std::string::npos)
+      << negative_floor.out;
 }
 
 }  // namespace

@@ -293,8 +293,8 @@ class Client:
         anything GDAL's SetFromUserInput takes). vehicle and soil_table: a JSON file (the CLI's
         formats), a dict or a message. criteria: a dict of pb.Criteria fields (design_slip,
         max_slip, go_margin, passes, slip_step). fe-ann: model (a registered model's id) and guard (a
-        dict of pb.SurrogateGuard fields: distance_threshold, spread_threshold, fallback_enabled,
-        return_after_steps; those left out keep the server's)."""
+        dict of pb.SurrogateGuard fields: distance_threshold, spread_threshold, pressure_floor_pa,
+        fallback_enabled, return_after_steps; those left out keep the server's)."""
         if (slope is None) == (elevation is None):
             raise InputError("slope", "give exactly one of slope and elevation")
         if (soil_class is None) != (soil_table is None):

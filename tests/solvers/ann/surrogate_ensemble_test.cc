@@ -2,7 +2,10 @@
 // envelope and the spread flagging what lies outside the training (Drucker-Prager lab paths at
 // 10-80 kPa) and not what lies inside, settable thresholds, and saving and loading; and the ANN
 // material (ann_material.h) on the same ensemble, falling back to the Drucker-Prager model itself.
+#include "solvers/ann/surrogate_ensemble.h"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -10,14 +13,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <iostream>
-
-#include <unistd.h>
+#include <iterator>
+#include <limits>
 
 #include "solvers/ann/ann_material.h"
 #include "solvers/ann/lab_paths.h"
-#include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/common/errors.h"
 #include "solvers/material/drucker_prager.h"
 #include "tests/solvers/ann/drucker_prager_paths.h"
@@ -126,6 +127,34 @@ TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
   EXPECT_EQ(FlaggedFraction(ensemble.Answer(deep, false)), 0.0);
   EXPECT_THROW(ensemble.SetThresholds(0, 1), InputError);
   EXPECT_THROW(ensemble.SetThresholds(1, -1), InputError);
+  // A pressure floor flags every input whose mean compression lies below it, whatever the members
+  // say: here one floor between the path's least and most.
+  double least_pa = std::numeric_limits<double>::infinity();
+  double most_pa = 0;
+  for (const SurrogateInput& input : deep) {
+    least_pa = std::min(least_pa, -input.stress_pa.head<3>().mean());
+    most_pa = std::max(most_pa, -input.stress_pa.head<3>().mean());
+  }
+  ASSERT_GT(most_pa, least_pa);
+  ensemble.SetPressureFloor(0.5 * (least_pa + most_pa));
+  EXPECT_EQ(ensemble.pressure_floor_pa(), 0.5 * (least_pa + most_pa));
+  int below = 0;
+  for (const EnsembleAnswer& answer : ensemble.Answer(deep, false)) {
+    EXPECT_EQ(answer.out_of_distribution, answer.mean_pressure_pa < ensemble.pressure_floor_pa());
+    below += answer.out_of_distribution;
+  }
+  EXPECT_GT(below, 0);
+  EXPECT_LT(below, static_cast<int>(deep.size()));
+  for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      ensemble.SetPressureFloor(bad);
+      ADD_FAILURE() << bad << " Pa accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "pressure_floor_pa");
+    }
+  }
+  ensemble.SetPressureFloor(0);
+  EXPECT_EQ(FlaggedFraction(ensemble.Answer(deep, false)), 0.0);
   std::filesystem::remove_all(std::filesystem::temp_directory_path() /
                               ("gonogo_ensemble_" + std::to_string(getpid())));
   try {

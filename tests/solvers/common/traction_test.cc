@@ -65,6 +65,9 @@ TEST(TractionRequest, ASurrogateGuardIsRefusedByField) {
   bad.surrogate_guard.spread_threshold = NAN;
   EXPECT_EQ(refused_field(bad), "surrogate_guard.spread_threshold");
   bad = r;
+  bad.surrogate_guard.pressure_floor_pa = -500;
+  EXPECT_EQ(refused_field(bad), "surrogate_guard.pressure_floor_pa");
+  bad = r;
   bad.surrogate_guard.return_after_steps = -3;
   EXPECT_EQ(refused_field(bad), "surrogate_guard.return_after_steps");
   bad = r;

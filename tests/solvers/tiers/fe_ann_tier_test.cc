@@ -354,6 +354,10 @@ TEST_F(FeAnnTierTest, ARequestSetsItsOwnGuardOverTheDeployments) {
   TractionRequest tighter = Request();
   tighter.surrogate_guard.distance_threshold = 30.00004;
   EXPECT_EQ(tier.VersionFor(tighter), "fe-ann-3-tiny-d30-s0-return10");
+  TractionRequest floored = Request();
+  floored.surrogate_guard.pressure_floor_pa = 4000;
+  EXPECT_EQ(tier.VersionFor(floored), "fe-ann-3-tiny-p4000-return10")
+      << "a floor computes another curve, cached apart";
   tier.ResolveChoices(tighter, "");
   EXPECT_EQ(*tighter.surrogate_guard.distance_threshold, 30)
       << "a threshold counts to the digits its version (so its key) names";
@@ -372,6 +376,9 @@ TEST_F(FeAnnTierTest, ARequestSetsItsOwnGuardOverTheDeployments) {
   SurrogateGuard negative;
   negative.spread_threshold = -0.1;
   EXPECT_EQ(refused_field(tier, negative), "curve.surrogate_guard.spread_threshold");
+  SurrogateGuard negative_floor;
+  negative_floor.pressure_floor_pa = -1;
+  EXPECT_EQ(refused_field(tier, negative_floor), "curve.surrogate_guard.pressure_floor_pa");
   SurrogateGuard returns_from_nothing;
   returns_from_nothing.fallback_enabled = false;
   returns_from_nothing.return_after_steps = 5;
@@ -710,6 +717,15 @@ TEST_F(FeAnnTierTest, ARigPathAnsweredAsTheTierAnswersItsPointIsTheRvesWhereFlag
             << 100 * on_rve.error << " %\n";
   EXPECT_NEAR(on_network.error, open_loop, 0.2 * open_loop);
   EXPECT_GT(std::abs(on_network.error - on_rve.error), 0.0) << "two answers, not one";
+
+  // A pressure floor above the path's stresses flags its first increment: the RVE answers the
+  // whole path, as with every threshold at nothing.
+  ann::SurrogateEnsemble floored = ann::SurrogateEnsemble::Load(*directory_ + "/model");
+  floored.SetPressureFloor(1e9);
+  const GuardedReplay under_floor = ReplayGuarded(floored, rve, path);
+  EXPECT_EQ(under_floor.first_fallback_step, 0);
+  EXPECT_EQ(under_floor.fallbacks, 1);
+  EXPECT_TRUE(under_floor.stresses_pa == on_rve.stresses_pa);
 
   // At the model's own thresholds, what the tier's point gets: printed for the README.
   const GuardedReplay guarded = ReplayGuarded(model, rve, path);
