@@ -199,6 +199,15 @@ def test_a_trained_model_computes_an_fe_ann_curve_and_says_how(tiny_server):
                              slip_step=0.5, model=model.id, as_dataframe=False)
         assert again.provenance.get("cache_hit") is True
         assert again.provenance["surrogate_run"] == run
+        # A request's pressure floor above every stress of the soil: each point is answered by its
+        # RVE from its first increment, and the curve's version names the floor.
+        floored = client.curve(tier="fe-ann", tyre=tyre, wheel_load_n=1000, soil="seed000_sand_rve100",
+                               slip_step=0.5, model=model.id, guard={"pressure_floor_pa": 1e9},
+                               as_dataframe=False)
+        assert floored.provenance["tier_version"] == "fe-ann-3-tiny-p1e+09", floored.provenance
+        floored_run = floored.provenance["surrogate_run"]
+        assert all(int(step) == 0 for step in floored_run["fallback_point_steps"]), floored_run
+        assert floored_run["fallbacks"] > fallbacks, (floored_run, run)
 
 
 def test_scalability_rows_per_scale(client):
