@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
   std::string soil_name = "seed000_sand_rve100", preset = "tiny", architecture_text = "64x64";
   int steps = 40, walks = 12, epochs = 200, threads = 2, rotated_copies = 0;
   double load_n = 1000, fe_de_budget_s = 0, distance_threshold = 0, spread_threshold = 0;
+  double pressure_floor_kpa = 0;
   double fe_ann_budget_s = 0, progress_every_s = 60, fe_ann_stop_at = 0;
   bool no_fe_de = false;
   std::string fe_de_curve_path;
@@ -136,6 +137,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--spread-threshold", spread_threshold,
                  "the fe-ann run's ensemble spread threshold; 0: the model's own")
+      ->capture_default_str();
+  app.add_option("--pressure-floor-kpa", pressure_floor_kpa,
+                 "the fe-ann run's pressure floor, kPa: a point whose mean compression is below "
+                 "it falls back to its RVE; 0: none")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads running the training paths")
       ->capture_default_str();
@@ -292,6 +298,7 @@ int main(int argc, char** argv) {
       options.fe_de = fe_de;
       options.distance_threshold = distance_threshold;
       options.spread_threshold = spread_threshold;
+      options.pressure_floor_pa = 1e3 * pressure_floor_kpa;
       options.return_after_steps = return_after_steps;
       const tiers::FeAnnTier fe_ann(options,
                                     std::make_shared<tiers::ListedSurrogateModels>(
