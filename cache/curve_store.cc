@@ -46,8 +46,9 @@ std::optional<SoilParameters> ParseStoredParameters(const std::string& text) {
 }
 
 // A surrogate run as one line of "name=value" words, the fallback steps comma-separated:
-// "fe_steps=900 fallbacks=2 at=449,637 returns=0 unanswered=0 kept=2 updates=114041
-// network_s=2.28 fallback_s=1.01"; "" for a curve without one.
+// "fe_steps=900 fallbacks=2 at=449,637 below_floor=0 returns=0 unanswered=0 kept=2 updates=114041
+// network_s=2.28 fallback_s=1.01"; "" for a curve without one. A line written before a figure
+// existed reads it as 0 (below_floor).
 std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
   if (!run) return "";
   std::ostringstream out;
@@ -56,9 +57,10 @@ std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
   for (std::size_t k = 0; k < run->fallback_point_steps.size(); ++k) {
     out << (k ? "," : "") << run->fallback_point_steps[k];
   }
-  out << " returns=" << run->returns << " unanswered=" << run->unanswered_flags
-      << " kept=" << run->fallback_paths_kept << " updates=" << run->network_point_updates
-      << " network_s=" << run->network_seconds << " fallback_s=" << run->fallback_seconds;
+  out << " below_floor=" << run->fallbacks_below_pressure_floor << " returns=" << run->returns
+      << " unanswered=" << run->unanswered_flags << " kept=" << run->fallback_paths_kept
+      << " updates=" << run->network_point_updates << " network_s=" << run->network_seconds
+      << " fallback_s=" << run->fallback_seconds;
   return out.str();
 }
 
@@ -75,6 +77,8 @@ std::optional<SurrogateRun> ParseSurrogateRunText(const std::string& text) {
       if (name == "fe_steps") run.fe_steps = std::stoll(value);
       else if (name == "fallbacks") run.fallbacks = std::stoi(value);
       else if (name == "returns") run.returns = std::stoll(value);
+      else if (name == "below_floor")
+        run.fallbacks_below_pressure_floor = std::stoi(value);
       else if (name == "unanswered") run.unanswered_flags = std::stoll(value);
       else if (name == "kept") run.fallback_paths_kept = std::stoi(value);
       else if (name == "updates") run.network_point_updates = std::stoll(value);

@@ -80,7 +80,8 @@ void PrintCurveCsv(const v1::TractionCurve& curve) {
 
 // How an fe-ann curve answered its points: "surrogate run: 3 of its points fell back to their
 // RVEs, at steps 449, 450 and 637 of 900 (3 paths kept for training); network 2.28 s for 114041
-// point updates, fallbacks 1.01 s".
+// point updates, fallbacks 1.01 s"; "..., at steps 0, 0, ... of 900, 66 below the pressure floor
+// (...)" where the guard's floor flagged them.
 void PrintSurrogateRun(const v1::SurrogateRun& run) {
   constexpr int kStepsShown = 8;
   std::cout << "surrogate run: ";
@@ -97,6 +98,9 @@ void PrintSurrogateRun(const v1::SurrogateRun& run) {
     }
     if (steps > kStepsShown) std::cout << " and " << steps - kStepsShown << " more";
     std::cout << " of " << run.fe_steps();
+    if (run.fallbacks_below_pressure_floor() > 0) {
+      std::cout << ", " << run.fallbacks_below_pressure_floor() << " below the pressure floor";
+    }
     if (run.returns() > 0) std::cout << ", " << run.returns() << " sent back to the network";
     if (run.fallback_paths_kept() > 0) {
       std::cout << " (" << run.fallback_paths_kept() << " paths kept for training)";

@@ -125,6 +125,7 @@ SurrogateRun FromProto(const v1::SurrogateRun& p) {
   run.fallbacks = static_cast<int>(p.fallbacks());
   run.fallback_point_steps.assign(p.fallback_point_steps().begin(),
                                   p.fallback_point_steps().end());
+  run.fallbacks_below_pressure_floor = static_cast<int>(p.fallbacks_below_pressure_floor());
   run.returns = p.returns();
   run.unanswered_flags = p.unanswered_flags();
   run.fallback_paths_kept = static_cast<int>(p.fallback_paths_kept());
@@ -139,6 +140,7 @@ v1::SurrogateRun ToProto(const SurrogateRun& run) {
   p.set_fe_steps(run.fe_steps);
   p.set_fallbacks(static_cast<uint32_t>(run.fallbacks));
   for (std::int64_t step : run.fallback_point_steps) p.add_fallback_point_steps(step);
+  p.set_fallbacks_below_pressure_floor(static_cast<uint32_t>(run.fallbacks_below_pressure_floor));
   p.set_returns(run.returns);
   p.set_unanswered_flags(run.unanswered_flags);
   p.set_fallback_paths_kept(static_cast<uint32_t>(run.fallback_paths_kept));

@@ -421,7 +421,8 @@ std::vector<material::PointResponse> AnnMaterial::Update(
       responses[i] = FallBack(committed, increments[i].displacement_gradient_increment,
                               want_tangent);
       if (responses[i].status == material::UpdateStatus::kOk) {
-        log_->RecordFallback({committed.steps(), answer.distance, answer.relative_spread});
+        log_->RecordFallback({committed.steps(), answer.distance, answer.relative_spread,
+                              answer.mean_pressure_pa < ensemble_->pressure_floor_pa()});
       }
       continue;
     }

@@ -78,6 +78,7 @@ class FallbackLog {
     std::int64_t point_step = 0;  // increments the point had taken when it fell back
     double distance = 0;          // the flag's measures
     double relative_spread = 0;
+    bool below_pressure_floor = false;  // flagged by the ensemble's pressure floor
   };
   void RecordFallback(const Event& event);
   void RecordUnansweredFlag();

@@ -262,6 +262,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     const ann::FallbackLog& log = material->log();
     for (const ann::FallbackLog::Event& event : log.fallbacks()) {
       report.fallback_steps.push_back(event.point_step);
+      report.fallbacks_below_pressure_floor += event.below_pressure_floor ? 1 : 0;
     }
     report.fallbacks = static_cast<int>(report.fallback_steps.size());
     report.unanswered_flags = log.unanswered_flags();
@@ -275,6 +276,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
   run.fe_steps = report.fe_steps;
   run.fallbacks = report.fallbacks;
   run.fallback_point_steps = report.fallback_steps;
+  run.fallbacks_below_pressure_floor = report.fallbacks_below_pressure_floor;
   run.returns = report.returns;
   run.unanswered_flags = report.unanswered_flags;
   run.fallback_paths_kept = fallback_paths ? static_cast<int>(fallback_paths->size()) : 0;

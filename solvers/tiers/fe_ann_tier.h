@@ -77,6 +77,7 @@ struct AnnRunReport : FeDeRunReport {
   // number of points that fell back.
   int fallbacks = 0;
   std::vector<std::int64_t> fallback_steps;
+  int fallbacks_below_pressure_floor = 0;  // of the fallbacks, those the pressure floor flagged
   std::int64_t unanswered_flags = 0;  // with the fallback off
   double network_seconds = 0;         // the ensemble's batched calls
   std::int64_t network_point_updates = 0;

@@ -98,6 +98,21 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
       << own_guard.out;
   EXPECT_NE(own_guard.out.find("surrogate model " + id + ", computed by rank 1"), std::string::npos)
       << "not the default guard's cached curve: " << own_guard.out;
+  // A pressure floor above every stress of the soil: each of the rig's 128 points is answered by
+  // its RVE from its first increment, and the run says the floor flagged them.
+  const CliRun floored =
+      Gonogo(server.endpoint(), std::string(kWheel) + " --pressure-floor-kpa 1000000");
+  ASSERT_EQ(floored.exit_code, 0) << floored.out;
+  EXPECT_NE(floored.out.find("tier fe-ann (fe-ann-3-tiny-p1e+09)"), std::string::npos)
+      << floored.out;
+  std::smatch floored_run;
+  ASSERT_TRUE(std::regex_search(
+      floored.out, floored_run,
+      std::regex("(\\d+) of its points fell back to their RVEs, at steps 0, 0, [^;]* of 900, "
+                 "(\\d+) below the pressure floor")))
+      << floored.out;
+  EXPECT_GE(std::stoi(floored_run[1]), 128) << floored.out;
+  EXPECT_EQ(floored_run[1], floored_run[2]) << floored.out;
 
   // The curve's provenance says how its points were answered, computed and from the cache alike:
   // with the fallback off none fell back; with it on (the cached curve above) the line names the

@@ -208,6 +208,8 @@ def test_a_trained_model_computes_an_fe_ann_curve_and_says_how(tiny_server):
         floored_run = floored.provenance["surrogate_run"]
         assert all(int(step) == 0 for step in floored_run["fallback_point_steps"]), floored_run
         assert floored_run["fallbacks"] > fallbacks, (floored_run, run)
+        assert floored_run["fallbacks_below_pressure_floor"] == floored_run["fallbacks"], floored_run
+        assert "fallbacks_below_pressure_floor" not in run, run  # none without a floor
 
 
 def test_scalability_rows_per_scale(client):
