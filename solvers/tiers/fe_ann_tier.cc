@@ -109,6 +109,7 @@ FeAnnOptions FeAnnTier::OptionsFor(const TractionRequest& request,
   if (guard.return_after_steps) options.return_after_steps = *guard.return_after_steps;
   options.distance_threshold = ToVersionDigits(options.distance_threshold);
   options.spread_threshold = ToVersionDigits(options.spread_threshold);
+  options.pressure_floor_pa = ToVersionDigits(options.pressure_floor_pa);
   Require(options.return_after_steps == 0 || options.fallback_enabled,
           prefix + "surrogate_guard.return_after_steps",
           "a point returns from its fallback, which this server turns off (gonogo-server "

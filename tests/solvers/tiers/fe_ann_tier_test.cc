@@ -355,9 +355,11 @@ TEST_F(FeAnnTierTest, ARequestSetsItsOwnGuardOverTheDeployments) {
   tighter.surrogate_guard.distance_threshold = 30.00004;
   EXPECT_EQ(tier.VersionFor(tighter), "fe-ann-3-tiny-d30-s0-return10");
   TractionRequest floored = Request();
-  floored.surrogate_guard.pressure_floor_pa = 4000;
+  floored.surrogate_guard.pressure_floor_pa = 4000.00004;
   EXPECT_EQ(tier.VersionFor(floored), "fe-ann-3-tiny-p4000-return10")
       << "a floor computes another curve, cached apart";
+  EXPECT_EQ(tier.OptionsFor(floored, "").pressure_floor_pa, 4000)
+      << "a floor counts to the digits its version names";
   tier.ResolveChoices(tighter, "");
   EXPECT_EQ(*tighter.surrogate_guard.distance_threshold, 30)
       << "a threshold counts to the digits its version (so its key) names";
