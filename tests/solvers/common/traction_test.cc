@@ -26,7 +26,7 @@ TEST(TractionRequest, SlipSweepEndsAtOneAndIsEven) {
 }
 
 TEST(TractionRequest, ValidateNamesTheField) {
-  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}};
+  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}, "", {}};
   EXPECT_NO_THROW(r.Validate());
   r.soil.cone_index_pa = NAN;
   try {
@@ -46,7 +46,7 @@ TEST(TractionRequest, ValidateNamesTheField) {
 }
 
 TEST(TractionRequest, ASurrogateGuardIsRefusedByField) {
-  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}};
+  TractionRequest r{{300e3, "", std::nullopt}, FedAlphaTyre(), 13438, {0, 0.2}, "", {}};
   r.surrogate_guard.distance_threshold = 0;  // the model's own
   r.surrogate_guard.return_after_steps = 20;
   EXPECT_NO_THROW(r.Validate());

@@ -45,7 +45,9 @@ TEST(WalkShareWeights, GiveTheWalksTheirShareOfTheLoss) {
   double walk_loss = 0, all_loss = 0;
   for (std::size_t k = 0; k < histories.size(); ++k) {
     const bool walk = k < paths.size() && paths[k].spec.path == ann::LabPath::kRandomWalk;
-    if (!walk) EXPECT_EQ(weights[k], 1.0) << k;
+    if (!walk) {
+      EXPECT_EQ(weights[k], 1.0) << k;
+    }
     walk_loss += walk ? weights[k] * static_cast<double>(histories[k].steps()) : 0.0;
     all_loss += weights[k] * static_cast<double>(histories[k].steps());
   }
