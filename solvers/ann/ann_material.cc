@@ -422,7 +422,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
                               want_tangent);
       if (responses[i].status == material::UpdateStatus::kOk) {
         log_->RecordFallback({committed.steps(), answer.distance, answer.relative_spread,
-                              answer.mean_pressure_pa < ensemble_->pressure_floor_pa()});
+                              answer.below_pressure_floor});
       }
       continue;
     }

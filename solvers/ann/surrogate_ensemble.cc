@@ -277,9 +277,11 @@ std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<Surrogat
         StressScale(inputs[n], answer.stress_increment_pa, envelope_.stress_floor_pa);
     answer.distance = envelope_.Distance(inputs[n]);
     answer.mean_pressure_pa = -inputs[n].stress_pa.head<3>().mean();
-    answer.out_of_distribution =
-        answer.distance > distance_threshold_ || answer.relative_spread > spread_threshold_ ||
-        (pressure_floor_pa_ > 0 && answer.mean_pressure_pa < pressure_floor_pa_);
+    answer.below_pressure_floor =
+        pressure_floor_pa_ > 0 && answer.mean_pressure_pa < pressure_floor_pa_;
+    answer.out_of_distribution = answer.distance > distance_threshold_ ||
+                                 answer.relative_spread > spread_threshold_ ||
+                                 answer.below_pressure_floor;
   }
   return answers;
 }

@@ -87,6 +87,7 @@ struct EnsembleAnswer {
   double distance = 0;                            // from the training inputs
   double relative_spread = 0;                     // see above
   double mean_pressure_pa = 0;                    // -tr(sigma)/3 before the step
+  bool below_pressure_floor = false;              // of a floor that is set (see above)
   bool out_of_distribution = false;
 };
 
