@@ -80,6 +80,8 @@ struct CommandLine {
   double path_stress_weighting = 0;
   int rollout_steps = 0;  // TrainingOptions::rollout_steps
   double rollout_weight = 1;
+  double stress_noise = 0;  // TrainingOptions::stress_noise
+  double noise_correction = 1;
   double walk_share = 0;  // > 0: the random walks' share of the loss
   double walk_persistence = 0;  // the training walks' (ann::LabPathSpec::walk_persistence)
   std::uint64_t training_seed = 1;
@@ -213,6 +215,8 @@ TrainingOptions StudyTraining(const CommandLine& line, const std::vector<double>
   options.path_stress_weighting = line.path_stress_weighting;
   options.rollout_steps = line.rollout_steps;
   options.rollout_weight = line.rollout_weight;
+  options.stress_noise = line.stress_noise;
+  options.noise_correction = line.noise_correction;
   options.history_weights = history_weights;
   return options;
 }
@@ -864,6 +868,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--rollout-weight", line.rollout_weight, "the rollout term's weight in the loss")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--stress-noise", line.stress_noise,
+                 "training noise on the stress before each step, its standard deviation a "
+                 "fraction of the path's mean |sigma| (MLPs; 0: none)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--noise-correction", line.noise_correction,
+                 "the share of the noise each step's target takes back: 1 ends the step on the "
+                 "recorded stress, 0 as far off as it began")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_option("--walk-share", line.walk_share,
                  "the random walks' share of the training loss (their steps weighed to give it); "

@@ -145,6 +145,8 @@ Eigen::Matrix<double, 6, 6> StressRotationMap(const Matrix3& rotation) {
 // What the rollout term of the loss (TrainingOptions::rollout_steps) replays windows with: per
 // sample, its step's stress rotation map, the recorded stress and carried variables after it,
 // and its path's mean |sigma|; and the first sample of every window of K steps in one history.
+// The training noise (TrainingOptions::stress_noise) takes the rotation maps and the paths' mean
+// |sigma| alone.
 struct RolloutData {
   torch::Tensor rotation_maps;   // (N, 6, 6)
   torch::Tensor stress_after;    // (N, 6), Pa
@@ -352,6 +354,12 @@ void TrainingOptions::Validate(const std::string& field_prefix) const {
   if (!(rollout_weight >= 0 && std::isfinite(rollout_weight))) {
     throw InputError(field_prefix + "rollout_weight", "must be finite and not negative");
   }
+  if (!(stress_noise >= 0 && stress_noise <= 1)) {
+    throw InputError(field_prefix + "stress_noise", "must be in [0, 1]");
+  }
+  if (!(noise_correction >= 0 && noise_correction <= 1)) {
+    throw InputError(field_prefix + "noise_correction", "must be in [0, 1]");
+  }
   for (double weight : history_weights) {
     if (!(weight >= 0 && std::isfinite(weight))) {
       throw InputError(field_prefix + "history_weights", "must be finite and not negative");
@@ -437,7 +445,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   std::vector<double> path_stress_pa;  // per step: its path's mean |sigma|
   std::vector<double> history_weight;   // per step: its history's weight
   const int rollout_steps = options.rollout_steps;
-  std::vector<Eigen::Matrix<double, 6, 6>> rotation_maps;  // per step, for the rollout term
+  const bool noisy = options.stress_noise > 0;
+  // Per step, for the rollout term and the noise's target.
+  const bool keeps_rotation_maps = rollout_steps > 0 || noisy;
+  std::vector<Eigen::Matrix<double, 6, 6>> rotation_maps;
   std::vector<std::int64_t> window_starts;
   std::vector<double> window_weights;
   for (std::size_t h = 0; h < histories.size(); ++h) {
@@ -469,7 +480,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
           CarriedBefore(history, columns, s + 1) - steps[s].internal_variables;
       targets.push_back(std::move(target));
       inputs.push_back(steps[s]);
-      if (rollout_steps > 0) rotation_maps.push_back(StressRotationMap(rotation));
+      if (keeps_rotation_maps) rotation_maps.push_back(StressRotationMap(rotation));
     }
   }
   if (inputs.empty()) throw InputError("histories", "no steps to train on");
@@ -519,7 +530,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   const torch::Tensor step_weights = StepWeights(path_stress_pa, history_weight, options);
   const int carried_count = static_cast<int>(carried.size());
   RolloutData rollout;
-  if (rollout_steps > 0) {
+  if (keeps_rotation_maps) {
     const auto count = static_cast<std::int64_t>(inputs.size());
     rollout.rotation_maps = torch::empty({count, 6, 6}, torch::kFloat64);
     rollout.path_stress_pa = torch::empty({count, 1}, torch::kFloat64);
@@ -531,6 +542,8 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       }
       scales[n] = std::max(path_stress_pa[n], 1.0);
     }
+  }
+  if (rollout_steps > 0) {
     // The state after each step: the state before it plus the recorded change.
     const torch::Tensor before = x.slice(1, 6, 12).unsqueeze(2);
     rollout.stress_after = torch::bmm(rollout.rotation_maps, before).squeeze(2) + y.slice(1, 0, 6);
@@ -631,13 +644,41 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       const torch::Tensor batch =
           order.slice(0, begin, std::min<std::int64_t>(begin + options.batch_size, samples));
       optimizer.zero_grad();
-      torch::Tensor predicted = net->forward(xs.index_select(0, batch));
-      if (architecture.anchored) predicted = predicted - net->forward(xs_rest.index_select(0, batch));
+      torch::Tensor batch_inputs, batch_inputs_at_rest, batch_answers;
+      if (noisy) {
+        // TrainingOptions::stress_noise: the stresses before the step perturbed, the targets
+        // taking back noise_correction of the perturbation, turned by the step's rotation.
+        torch::Tensor raw = x.index_select(0, batch);
+        torch::Tensor recorded = y.index_select(0, batch);
+        const torch::Tensor noise =
+            torch::randn({batch.size(0), 6}, torch::kFloat64) *
+            (options.stress_noise * rollout.path_stress_pa.index_select(0, batch));
+        raw.slice(1, 6, 12).add_(noise);
+        recorded.slice(1, 0, 6).sub_(
+            options.noise_correction *
+            torch::bmm(rollout.rotation_maps.index_select(0, batch), noise.unsqueeze(2))
+                .squeeze(2));
+        const torch::Tensor batch_features = Features(raw, reference_pa);
+        if (reference_pa > 0) {
+          recorded.slice(1, 0, 6).div_(PressureScale(raw.slice(1, 6, 12), reference_pa));
+        }
+        torch::Tensor batch_rest = batch_features.clone();
+        batch_rest.slice(1, 0, 6).zero_();
+        batch_inputs = (batch_features - in_mean) / in_scale;
+        batch_inputs_at_rest = (batch_rest - in_mean) / in_scale;
+        batch_answers = (recorded - out_mean) / out_scale;
+      } else {
+        batch_inputs = xs.index_select(0, batch);
+        batch_inputs_at_rest = xs_rest.index_select(0, batch);
+        batch_answers = ys.index_select(0, batch);
+      }
+      torch::Tensor predicted = net->forward(batch_inputs);
+      if (architecture.anchored) predicted = predicted - net->forward(batch_inputs_at_rest);
       torch::Tensor loss = step_weights.defined()
-                               ? ((predicted - ys.index_select(0, batch)).pow(2) *
+                               ? ((predicted - batch_answers).pow(2) *
                                   step_weights.index_select(0, batch).unsqueeze(1))
                                      .mean()
-                               : torch::mse_loss(predicted, ys.index_select(0, batch));
+                               : torch::mse_loss(predicted, batch_answers);
       loss_sum += loss.item<double>() * static_cast<double>(batch.size(0));
       if (rollout_steps > 0) {
         const torch::Tensor term = rollout_loss();
@@ -837,6 +878,11 @@ RecurrentStressSurrogate RecurrentStressSurrogate::Train(const std::vector<Strai
     throw InputError("training.rollout_steps",
                      "the recurrent surrogate is trained on whole histories already (the rollout "
                      "term is for MLPs)");
+  }
+  if (options.stress_noise != 0) {
+    throw InputError("training.stress_noise",
+                     "the recurrent surrogate is trained on its recorded stresses (the training "
+                     "noise is for MLPs)");
   }
   const auto start = std::chrono::steady_clock::now();
   // Histories of equal length make one batch of sequences (time, batch, feature).

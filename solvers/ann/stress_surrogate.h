@@ -94,6 +94,18 @@ struct TrainingOptions {
   // path counts alike, however long; histories shorter than K give none.
   int rollout_steps = 0;
   double rollout_weight = 1;
+  // Training noise on the stress before the step, 0: none (Sanchez-Gonzalez et al. 2020,
+  // "Learning to simulate complex physics with graph networks", sec. 4.1: a model rolled out on
+  // its own answers meets states off the recorded trajectory, which a model trained on the
+  // recorded states alone has never seen). Each batch's stresses before the step are perturbed by
+  // e, Gaussian of standard deviation stress_noise times the path's mean |sigma| per Voigt
+  // component, drawn afresh every epoch, and the target takes back noise_correction of it:
+  //   d_sigma' = d_sigma - c R e R^T,
+  // so that at c = 1 the step ends on the recorded stress after it (asking the network to pull a
+  // drifted stress back towards the path), at c = 0 as far off as it began. Measured, neither
+  // helps a network of stress increments (solvers/ann/README.md, "Training noise").
+  double stress_noise = 0;
+  double noise_correction = 1;
   // Asked before each epoch; true stops the training with CancelledError (a cancelled job).
   std::function<bool()> stop;
   void Validate(const std::string& field_prefix) const;

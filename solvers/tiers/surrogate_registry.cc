@@ -175,6 +175,10 @@ std::string TrainingText(const ann::TrainingOptions& options) {
       << " path_stress_weighting=" << options.path_stress_weighting
       << " rollout_steps=" << options.rollout_steps;
   if (options.rollout_steps > 0) out << " rollout_weight=" << options.rollout_weight;
+  if (options.stress_noise > 0) {
+    out << " stress_noise=" << options.stress_noise
+        << " noise_correction=" << options.noise_correction;
+  }
   out << " weighted_histories="
       << std::count_if(options.history_weights.begin(), options.history_weights.end(),
                        [](double weight) { return weight != 1.0; });

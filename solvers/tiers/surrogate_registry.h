@@ -53,7 +53,8 @@ struct RegisteredSurrogate : SurrogateModelRecord {
 
 // How a model's members were trained, for its record: "epochs=300 batch_size=64
 // learning_rate=0.003 seed=1 path_stress_weighting=0 rollout_steps=0 weighted_histories=0", with
-// rollout_weight after rollout_steps when the term is on. Member k was trained with seed + k;
+// rollout_weight after rollout_steps when the term is on, stress_noise and noise_correction
+// after them when there is training noise. Member k was trained with seed + k;
 // weighted_histories counts the training histories whose weight in the loss is not 1
 // (TrainingOptions::history_weights). What the network is (anchoring, pressure scaling, carried
 // variables) is its architecture's name.

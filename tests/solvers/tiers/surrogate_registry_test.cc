@@ -277,7 +277,8 @@ TEST_F(SurrogateRegistryTest, WhatACrashLeavesIsNeitherListedNorKept) {
 }
 
 // A model's record says how its members were trained: the rollout term's weight only when the
-// term is on, and how many histories the loss weighs other than 1.
+// term is on, the training noise only when there is some, and how many histories the loss weighs
+// other than 1.
 TEST(TrainingText, NamesTheOptionsThatShapedTheMembers) {
   ann::TrainingOptions options;
   options.epochs = 300;
@@ -294,6 +295,12 @@ TEST(TrainingText, NamesTheOptionsThatShapedTheMembers) {
   EXPECT_EQ(TrainingText(options),
             "epochs=300 batch_size=64 learning_rate=0.003 seed=7 path_stress_weighting=0.5 "
             "rollout_steps=20 rollout_weight=0.1 weighted_histories=2");
+  options.stress_noise = 0.02;
+  options.noise_correction = 0.5;
+  EXPECT_EQ(TrainingText(options),
+            "epochs=300 batch_size=64 learning_rate=0.003 seed=7 path_stress_weighting=0.5 "
+            "rollout_steps=20 rollout_weight=0.1 stress_noise=0.02 noise_correction=0.5 "
+            "weighted_histories=2");
 }
 
 }  // namespace
