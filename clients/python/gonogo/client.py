@@ -196,10 +196,12 @@ class Job:
 
     def rasters(self, out_dir=None):
         """The class and speed rasters as arrays with their georeferencing:
-        {"gonogo": Raster, "speed": Raster}; downloads them first (into `out_dir`, or a temporary
-        directory)."""
+        {"gonogo": Raster, "speed": Raster}; downloads them first (into `out_dir`, where the files
+        stay, or a temporary directory removed once they are read)."""
         from gonogo.rasters import read_raster
-        out_dir = out_dir or tempfile.mkdtemp(prefix=f"gonogo-{self.id}-")
+        if out_dir is None:
+            with tempfile.TemporaryDirectory(prefix=f"gonogo-{self.id}-") as temporary:
+                return self.rasters(temporary)
         self.download(out_dir, "gonogo.tif")
         self.download(out_dir, "speed.tif")
         return {name: read_raster(os.path.join(out_dir, name + ".tif")) for name in ("gonogo", "speed")}

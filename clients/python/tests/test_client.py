@@ -3,10 +3,12 @@
 Run by ctest as python_client_test; by hand:
     GONOGO_BUILD_DIR=build PYTHONPATH=build/python python3 -m pytest clients/python/tests
 """
+import glob
 import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
 
 import grpc
@@ -106,6 +108,9 @@ def test_map_from_arrays_matches_the_map_from_files(client, terrain):
     a, b = from_files.rasters()["gonogo"], from_arrays.rasters()["gonogo"]
     np.testing.assert_array_equal(a.array, b.array)
     assert a.geotransform == pytest.approx(b.geotransform)
+    # Read without a folder, the rasters leave no download behind.
+    for job in (from_files, from_arrays):
+        assert glob.glob(os.path.join(tempfile.gettempdir(), f"gonogo-{job.id}-*")) == []
 
 
 def test_curve_is_a_structured_array_in_si_units(client, server):
