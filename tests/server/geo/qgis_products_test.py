@@ -43,11 +43,13 @@ SPEED_RAMP = [(215, 25, 28), (253, 174, 97), (255, 255, 191), (166, 217, 106), (
 
 
 def setUpModule():
-    global QGS_APP
+    global QGS_APP, QT_FOLDER
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    runtime = tempfile.mkdtemp(prefix="qgis_runtime_")
-    os.chmod(runtime, 0o700)
-    os.environ["XDG_RUNTIME_DIR"] = runtime
+    # Qt's runtime directory and its temporary files (qt_temp-*) in one folder, removed at the end.
+    QT_FOLDER = tempfile.mkdtemp(prefix="qgis_runtime_")
+    os.chmod(QT_FOLDER, 0o700)
+    os.environ["XDG_RUNTIME_DIR"] = QT_FOLDER
+    os.environ["TMPDIR"] = QT_FOLDER
     from qgis.core import QgsApplication
     QGS_APP = QgsApplication([], False)
     QGS_APP.initQgis()
@@ -55,6 +57,7 @@ def setUpModule():
 
 def tearDownModule():
     QGS_APP.exitQgis()
+    shutil.rmtree(QT_FOLDER, ignore_errors=True)
 
 
 def rgb(colour):
