@@ -453,16 +453,27 @@ TEST(StressSurrogate, TheLossWeighsThePathsAsTold) {
             "training.path_stress_weighting");
 }
 
+// A triaxial at 5 kPa, a simple shear at 80 kPa and a walk at 30 kPa, and the training of a
+// 16-wide network on them (80 epochs, batches of 16): what the rollout and noise tests compare
+// training options on.
+std::vector<StrainHistory> ThreeSmallPaths() {
+  return {Path(LabPath::kTriaxial, 5e3, 0.02), Path(LabPath::kSimpleShear, 80e3, 0.04),
+          Path(LabPath::kRandomWalk, 30e3, 0.004, 7)};
+}
+
+TrainingOptions SmallNetworkTraining() {
+  TrainingOptions options;
+  options.epochs = 80;
+  options.batch_size = 16;
+  return options;
+}
+
 // TrainingOptions::rollout_steps: with the rollout term the loss sees what a replay sees, the
 // network's own stresses fed back, so the same small network trained as long replays its
 // training paths closer than on single steps alone; options that do not fit are refused by field.
 TEST(StressSurrogate, TheRolloutTermReplaysThePathsCloser) {
-  const std::vector<StrainHistory> paths = {Path(LabPath::kTriaxial, 5e3, 0.02),
-                                            Path(LabPath::kSimpleShear, 80e3, 0.04),
-                                            Path(LabPath::kRandomWalk, 30e3, 0.004, 7)};
-  TrainingOptions options;
-  options.epochs = 80;
-  options.batch_size = 16;
+  const std::vector<StrainHistory> paths = ThreeSmallPaths();
+  const TrainingOptions options = SmallNetworkTraining();
   const auto trained = [&](int rollout_steps, double rollout_weight, TrainingReport* report) {
     TrainingOptions rolled = options;
     rolled.rollout_steps = rollout_steps;
@@ -507,12 +518,8 @@ TEST(StressSurrogate, TheRolloutTermReplaysThePathsCloser) {
 // itself, against increments a small fraction of it. Options out of range are refused by field,
 // and the recurrent surrogate takes no noise.
 TEST(StressSurrogate, TrainingNoiseLeavesAStepFromOffThePathAsItWas) {
-  const std::vector<StrainHistory> paths = {Path(LabPath::kTriaxial, 5e3, 0.02),
-                                            Path(LabPath::kSimpleShear, 80e3, 0.04),
-                                            Path(LabPath::kRandomWalk, 30e3, 0.004, 7)};
-  TrainingOptions options;
-  options.epochs = 80;
-  options.batch_size = 16;
+  const std::vector<StrainHistory> paths = ThreeSmallPaths();
+  const TrainingOptions options = SmallNetworkTraining();
   const auto trained = [&](double stress_noise, double noise_correction) {
     TrainingOptions noisy = options;
     noisy.stress_noise = stress_noise;
