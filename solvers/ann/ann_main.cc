@@ -6,16 +6,18 @@
 //
 // Runs the laboratory paths of the fe-ann recipe (solvers/tiers/surrogate_training.h) on the
 // soil's RVE, with the RVE numerics of the fe-de preset: a training set and a held-out set (other
-// pressures, another seed), on OpenMP threads, one path per thread. Trains an ensemble per MLP --architecture (one network per
-// GRU: gru32) and prints, per
-// architecture, the training figures, each held-out path's replay error (the stress error
-// relative to the path's mean |sigma|) and the evaluation cost; with --rig-load-n, each held-out
-// rig path also as the fe-ann tier answers its point (tiers::ReplayGuarded: the RVE from where the
-// ensemble flags). With --out, writes the histories
-// (training.npy, held_out.npy with their .columns.txt) and each ensemble (DIR/<architecture>/).
-#include <CLI/CLI.hpp>
+// pressures, another seed), on OpenMP threads, one path per thread. Trains an ensemble per MLP
+// --architecture (one network per GRU: gru32) and prints, per architecture, the training figures,
+// each held-out path's replay error (the stress error relative to the path's mean |sigma|) and
+// the evaluation cost; with --rig-load-n, each held-out rig path also as the fe-ann tier answers
+// its point (tiers::ReplayGuarded: the RVE from where the ensemble flags). With --out, writes the
+// histories (training.npy, held_out.npy with their .columns.txt) and each ensemble
+// (DIR/<architecture>/). The options: study_command_line.h. --rest-kpa and --increment-kpa run
+// only a study of the RVE alone instead (rve_point_studies.h).
 #include <omp.h>
+#include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -29,9 +31,9 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "solvers/ann/lab_paths.h"
+#include "solvers/ann/rve_point_studies.h"
+#include "solvers/ann/study_command_line.h"
 #include "solvers/ann/surrogate_ensemble.h"
 #include "solvers/common/errors.h"
 #include "solvers/dem/rve/rve_material.h"
@@ -46,52 +48,6 @@ namespace {
 
 using namespace gonogo;
 using namespace gonogo::ann;
-
-struct CommandLine {
-  std::string soil = "seed000_sand_rve100";
-  std::string preset = "ci";
-  // The recipe's own defaults (solvers/tiers/surrogate_training.h).
-  int steps = tiers::SurrogateRecipe().steps;
-  int walks = tiers::SurrogateRecipe().walks;
-  int held_out_walks = tiers::SurrogateRecipe().held_out_walks;
-  std::vector<double> pressures_kpa;  // empty: the recipe's
-  bool unanchored = false;
-  double pressure_reference_pa = 0;  // MlpArchitecture::pressure_reference_pa
-  double rig_load_n = 0;  // 0: no rig paths
-  double rig_diameter_m = 0.5;
-  double rig_width_m = 0.2;
-  int rig_points = 16;
-  std::vector<double> validate_loads_n;
-  // --validate-load-n's runs at each of these multiples of the model's spread threshold.
-  std::vector<double> validate_spread_scales = {1.0};
-  std::vector<double> validate_pressure_floors_kpa = {0.0};
-  std::string register_data_dir;  // non-empty: register each MLP ensemble there
-  std::string from_model_dir;     // non-empty: also fine-tune this ensemble on the study's data
-  double rest_kpa = 0;            // > 0: only the rest test at this pressure
-  int rest_steps = 200;
-  double rest_axial_strain = 0;  // the rest test's oedometric compression before resting
-  double increment_kpa = 0;  // > 0: only the increment-size study at this pressure
-  std::string increment_path = "triaxial";
-  std::vector<int> increment_steps = {40, 160, 640};
-  double tune_learning_rate = 1e-3;
-  std::vector<std::string> architectures = {"64x64"};
-  int members = 3;
-  int epochs = 300;
-  double path_stress_weighting = 0;
-  int rollout_steps = 0;  // TrainingOptions::rollout_steps
-  double rollout_weight = 1;
-  double stress_noise = 0;  // TrainingOptions::stress_noise
-  double noise_correction = 1;
-  double walk_share = 0;  // > 0: the random walks' share of the loss
-  double walk_persistence = 0;  // the training walks' (ann::LabPathSpec::walk_persistence)
-  std::uint64_t training_seed = 1;
-  bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)
-  int return_after_steps = 0;  // --validate-load-n: fallen-back points return to the network
-  std::vector<unsigned> packing_seeds;  // held-out paths also run on these packings (RVE spread)
-  std::vector<std::string> carried;  // internal variables the MLPs carry (implies record_fabric)
-  int threads = 2;
-  std::string out;
-};
 
 double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -132,7 +88,7 @@ std::shared_ptr<const dem::rve::RveMaterial> PackedFrom(const SoilParameters& so
 // both reached). A surrogate of the soil cannot be told apart from its RVE closer than its packings
 // are from one another. Returns each path's differences, for a registered model's record.
 std::vector<std::vector<tiers::PackingDifference>> PrintPackingSpread(
-    const CommandLine& line, const SoilParameters& soil, const tiers::FeDeOptions& preset,
+    const StudyCommandLine& line, const SoilParameters& soil, const tiers::FeDeOptions& preset,
     const std::vector<tiers::NamedLabPath>& held_out_paths,
     const std::vector<StrainHistory>& held_out) {
   std::vector<std::vector<tiers::PackingDifference>> differences(held_out.size());
@@ -208,7 +164,8 @@ int GruWidth(const std::string& text) {
 }
 
 // The study's training options: epochs, seed and the loss's weights (empty: every history alike).
-TrainingOptions StudyTraining(const CommandLine& line, const std::vector<double>& history_weights) {
+TrainingOptions StudyTraining(const StudyCommandLine& line,
+                              const std::vector<double>& history_weights) {
   TrainingOptions options;
   options.epochs = line.epochs;
   options.seed = line.training_seed;
@@ -221,7 +178,7 @@ TrainingOptions StudyTraining(const CommandLine& line, const std::vector<double>
   return options;
 }
 
-void RunRecurrent(const CommandLine& line, const std::string& text,
+void RunRecurrent(const StudyCommandLine& line, const std::string& text,
                   const std::vector<StrainHistory>& training,
                   const std::vector<StrainHistory>& held_out,
                   const std::vector<double>& history_weights) {
@@ -242,7 +199,7 @@ void RunRecurrent(const CommandLine& line, const std::string& text,
   if (!line.out.empty()) gru.Save(line.out + "/" + gru.architecture() + ".pt");
 }
 
-TractionRequest RigRequest(const CommandLine& line, double load_n) {
+TractionRequest RigRequest(const StudyCommandLine& line, double load_n) {
   TractionRequest request;
   request.soil.soil_name = line.soil;
   request.tyre.diameter_m = line.rig_diameter_m;
@@ -260,7 +217,7 @@ struct FeDeReference {
 };
 
 // The ensemble as the fe-ann tier's model, run at each validation load against fe-de.
-void Validate(const CommandLine& line, const std::string& model_directory,
+void Validate(const StudyCommandLine& line, const std::string& model_directory,
               const std::string& architecture, double model_spread_threshold,
               const SoilParameters& soil, std::map<double, FeDeReference>& references) {
   tiers::SurrogateModelRecord record;
@@ -326,12 +283,14 @@ struct Study {
   // The soil's RVE, and where the held-out rig paths begin in `held_out` (its size: none).
   std::shared_ptr<const dem::rve::RveMaterial> rve;
   std::size_t first_rig_held_out = 0;
+  // The recipe's training paths, the first of `training` (the rig's recorded paths follow).
+  std::vector<tiers::NamedLabPath> training_paths;
 };
 
 // One trained ensemble's row (training figures, held-out errors, evaluation cost), then, as asked,
 // its files (--out), its registration (--register) and its fe-ann runs against fe-de
 // (--validate-load-n).
-void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemble& ensemble,
+void ReportEnsemble(const StudyCommandLine& line, Study& study, const SurrogateEnsemble& ensemble,
                     const std::string& name, const TrainingOptions& options,
                     const std::vector<TrainingReport>& reports, double train_s,
                     const std::string& from_model) {
@@ -458,104 +417,108 @@ void ReportEnsemble(const CommandLine& line, Study& study, const SurrogateEnsemb
   }
 }
 
-// The mean stress p (compression positive) and the deviatoric stress q (von Mises) of a
-// tension-positive Cauchy stress, Pa.
-struct MeanAndDeviatoric {
-  double p = 0, q = 0;
-};
-MeanAndDeviatoric StressInvariants(const Matrix3& sigma) {
-  const double p = -sigma.trace() / 3;
-  const Matrix3 deviator = sigma + p * Matrix3::Identity();
-  return {p, std::sqrt(1.5 * deviator.squaredNorm())};
+// The paths of an fe-de rig run at --rig-load-n (seed 000's step 2) added to the study:
+// --rig-points of them, evenly spread over the bin, to its training and half as many others to its
+// held-out paths, each with its floor (the path replayed from its initial stress on each of
+// --packing-seeds); the run's curve becomes the study's fe-de reference at that load.
+void AddRigPaths(const StudyCommandLine& line, const tiers::FeDeOptions& preset,
+                 const InternalVariables& internal, Study& study) {
+  const auto start = std::chrono::steady_clock::now();
+  const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(
+      tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n), {}, internal);
+  study.references[line.rig_load_n] = {recorded.run, Since(start)};
+  const std::vector<StrainHistory> rig_training =
+      tiers::EvenlySpread(recorded.paths, line.rig_points, 0);
+  const int rig_held_out = std::max(1, line.rig_points / 2);
+  const std::vector<StrainHistory> rig_checks = tiers::EvenlySpread(
+      recorded.paths, rig_held_out,
+      static_cast<int>(recorded.paths.size() / (2 * std::max(1, line.rig_points))) + 1);
+  study.training.insert(study.training.end(), rig_training.begin(), rig_training.end());
+  for (std::size_t k = 0; k < rig_checks.size(); ++k) {
+    study.held_out.push_back(rig_checks[k]);
+    study.held_out_names.push_back("rig point " + std::to_string(k + 1));
+    std::vector<tiers::PackingDifference> floors;
+    for (unsigned seed : line.packing_seeds) {
+      const StrainHistory other =
+          tiers::ReplayedOnRve(PackedFrom(study.soil, preset, seed), rig_checks[k]);
+      floors.push_back({seed, HistoryDifference(other, rig_checks[k])});
+    }
+    if (!floors.empty()) {
+      std::printf("# %s on the other packings: median %.2f %% (",
+                  study.held_out_names.back().c_str(), 100 * tiers::PackingFloor(floors));
+      for (const tiers::PackingDifference& floor : floors) {
+        std::printf("%s%u %.2f %%", &floor == &floors.front() ? "" : ", ", floor.packing_seed,
+                    100 * floor.difference);
+      }
+      std::printf(")\n");
+    }
+    study.held_out_packings.push_back(std::move(floors));
+  }
+  std::printf(
+      "# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
+      "paths recorded, %zu in training, %zu held out\n",
+      line.rig_load_n, line.preset.c_str(), recorded.run.elements, recorded.run.fe_steps,
+      Since(start), recorded.paths.size(), rig_training.size(), rig_checks.size());
 }
 
-// The RVE at rest: settled isotropically at `line.rest_kpa`, optionally compressed along z by
-// `line.rest_axial_strain` with the lateral strains held (oedometric, in 20 increments: a
-// deviatoric load like a point's under a wheel), then `line.rest_steps` zero increments, each
-// committed. Prints the mean stress p and the deviatoric q (von Mises) every tenth zero step:
-// what an FE point held still would see (a surrogate anchored at rest sees nothing).
-int RunRestTest(const CommandLine& line, const dem::rve::RveMaterial& rve) {
-  dem::rve::Rve settled = rve.initial();
-  settled.SettleIsotropic(line.rest_kpa * 1e3);
-  std::unique_ptr<material::MaterialState> state = rve.RestoreState(settled.Save());
-  std::printf("# rest test, %s, preset %s: settled at %g kPa, compressed by %g along z (lateral "
-              "strains held), then %d zero increments\n",
-              line.soil.c_str(), line.preset.c_str(), line.rest_kpa, line.rest_axial_strain,
-              line.rest_steps);
-  const auto step_once = [&](const Matrix3& increment, const std::string& what) {
-    material::PointIncrement point;
-    point.committed = state.get();
-    point.displacement_gradient_increment = increment;
-    std::vector<material::PointResponse> answer = rve.Update({point}, false);
-    if (answer.at(0).status != material::UpdateStatus::kOk) {
-      throw NumericalError(what + ": " + answer.at(0).reason);
-    }
-    state = std::move(answer.at(0).state);
-    return answer.at(0).stress_pa;
-  };
-  constexpr int kLoadingSteps = 20;
-  Matrix3 compression = Matrix3::Zero();
-  compression(2, 2) = -line.rest_axial_strain / kLoadingSteps;
-  if (line.rest_axial_strain > 0) {
-    for (int step = 0; step < kLoadingSteps; ++step) {
-      step_once(compression, "loading step " + std::to_string(step));
+// The study's data: the recipe's laboratory paths on the soil's RVE (training and held out), with
+// --packing-seeds each held-out path's floor, and with --rig-load-n the rig's paths
+// (AddRigPaths); written to --out.
+Study GatherStudy(const StudyCommandLine& line, const SoilParameters& soil,
+                  const tiers::FeDeOptions& preset,
+                  const std::shared_ptr<const dem::rve::RveMaterial>& rve) {
+  const auto start = std::chrono::steady_clock::now();
+  tiers::SurrogateRecipe recipe;
+  recipe.steps = line.steps;
+  recipe.walks = line.walks;
+  recipe.held_out_walks = line.held_out_walks;
+  if (!line.pressures_kpa.empty()) {
+    recipe.pressures_pa.clear();
+    for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
+  }
+  recipe.Validate("");
+  Study study;
+  study.soil = soil;
+  study.rve = rve;
+  study.training_paths = tiers::TrainingPaths(recipe);
+  // Only the training walks persist; the held-out walks stay the yardstick every model is read by.
+  for (tiers::NamedLabPath& path : study.training_paths) {
+    if (path.spec.path == ann::LabPath::kRandomWalk) {
+      path.spec.walk_persistence = line.walk_persistence;
     }
   }
-  std::printf("step,p_pa,q_pa,p_change_pct,q_change_pct\n");
-  double first_p = 0, first_q = 0;
-  for (int step = 0; step <= line.rest_steps; ++step) {
-    const auto [p, q] =
-        StressInvariants(step_once(Matrix3::Zero(), "rest step " + std::to_string(step)));
-    if (step == 0) first_p = p, first_q = q;
-    if (step % 10 == 0 || step == line.rest_steps) {
-      std::printf("%d,%.1f,%.1f,%.3f,%.3f\n", step, p, q, 100 * (p - first_p) / first_p,
-                  first_q > 0 ? 100 * (q - first_q) / first_q : 0.0);
-    }
+  const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
+  const InternalVariables internal = line.record_fabric || !line.carried.empty()
+                                         ? tiers::RveFabricVariables()
+                                         : InternalVariables{};
+  study.training = RunPaths(*rve, study.training_paths, line.threads, "training", internal);
+  study.held_out = RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
+  const double generation_s = Since(start);
+  for (const tiers::NamedLabPath& path : held_out_paths) study.held_out_names.push_back(path.name);
+  study.held_out_packings.resize(study.held_out.size());
+  if (!line.packing_seeds.empty()) {
+    study.held_out_packings =
+        PrintPackingSpread(line, soil, preset, held_out_paths, study.held_out);
   }
-  return 0;
+  study.first_rig_held_out = study.held_out.size();
+  if (line.rig_load_n > 0) AddRigPaths(line, preset, internal, study);
+  study.data_hash = tiers::HistoriesHash(study.training);
+  std::size_t steps = 0;
+  for (const StrainHistory& history : study.training) steps += history.steps();
+  std::printf(
+      "# soil %s (RVEs of %g grains), preset %s: %zu training paths (%zu steps), %zu "
+      "held-out, generated in %.1f s on %d threads\n",
+      line.soil.c_str(), soil.Get("grains_per_rve"), line.preset.c_str(), study.training.size(),
+      steps, study.held_out.size(), generation_s, line.threads);
+  if (!line.out.empty()) {
+    std::filesystem::create_directories(line.out);
+    WriteHistoriesNpy(line.out + "/training.npy", study.training);
+    WriteHistoriesNpy(line.out + "/held_out.npy", study.held_out);
+  }
+  return study;
 }
 
-// The RVE's answer against the size of its increments: one laboratory path (the recipe's strain:
-// 5 % axial for a triaxial, 10 % shear for a simple shear) at `line.increment_kpa`, taken in each
-// of `line.increment_steps` steps. A quasi-static packing answers the same whatever the step; the
-// RVE spreads each increment over at least min_steps_per_increment DE steps and relaxes it for
-// relax_steps, so a path of many small increments (an FE point's) gets more DE steps per unit of
-// strain than one of few large ones (a laboratory path's). Prints the mean stress p and the
-// deviatoric q (von Mises) at fractions of the path, per step count.
-int RunIncrementStudy(const CommandLine& line, const dem::rve::RveMaterial& rve) {
-  LabPathSpec spec;
-  spec.path = ParseLabPath(line.increment_path, "--increment-path");
-  spec.pressure_pa = line.increment_kpa * 1e3;
-  spec.max_strain = spec.path == LabPath::kSimpleShear ? 0.1 : 0.05;
-  std::printf("# increment study, %s, preset %s: %s at %g kPa to %g strain\n", line.soil.c_str(),
-              line.preset.c_str(), line.increment_path.c_str(), line.increment_kpa,
-              spec.max_strain);
-  std::printf("steps,fraction,strain,p_pa,q_pa,seconds\n");
-  DriverOptions options;
-  options.relative_tolerance = 0.02;  // as the training paths (tiers::RunLabPaths)
-  for (int steps : line.increment_steps) {
-    spec.steps = steps;
-    spec.Validate("--increment-steps.");
-    const auto start = std::chrono::steady_clock::now();
-    const StrainHistory history = RunLabPath(rve, spec, options);
-    const double seconds = Since(start);
-    if (!history.stopped_reason.empty()) {
-      std::printf("# %d steps stopped: %s\n", steps, history.stopped_reason.c_str());
-    }
-    const int settle = spec.settle_steps;  // recorded first
-    for (double fraction : {0.05, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0}) {
-      const int step = settle + static_cast<int>(std::lround(fraction * steps)) - 1;
-      if (step < 0 || step >= static_cast<int>(history.stresses_pa.size())) continue;
-      const auto [p, q] = StressInvariants(
-          material::VoigtToStress(history.stresses_pa[static_cast<std::size_t>(step)]));
-      std::printf("%d,%.2f,%.4f,%.1f,%.1f,%.2f\n", steps, fraction, fraction * spec.max_strain, p,
-                  q, seconds);
-    }
-  }
-  return 0;
-}
-
-int Run(const CommandLine& line) {
+int Run(const StudyCommandLine& line) {
   const tiers::CatalogueEntry* entry =
       tiers::BuiltinSoilCatalogue().Find(line.soil, dem::rve::kRveSoilModel);
   if (entry == nullptr) throw InputError("--soil", "no dem-hertz-mindlin soil '" + line.soil + "'");
@@ -577,125 +540,42 @@ int Run(const CommandLine& line) {
     throw InputError("--carry", std::string(e.what()).substr(e.field().size() + 2));
   }
   tiers::RveVariables(line.carried, "--carry");  // refused before any path runs
-  std::optional<SurrogateEnsemble> from;  // loaded before any path runs
+  std::optional<SurrogateEnsemble> from;         // loaded before any path runs
   if (!line.from_model_dir.empty()) from = SurrogateEnsemble::Load(line.from_model_dir);
+  const IncrementStudyOptions increment_study{
+      line.increment_kpa, ParseLabPath(line.increment_path, "--increment-path"),
+      line.increment_steps};  // refused before the RVE is packed
   const tiers::FeDeOptions preset = tiers::FeDeOptions::Preset(line.preset);
   const auto rve = dem::rve::SharedRveMaterial(
       dem::rve::RveMaterialParamsFromSoil(entry->parameters, preset.numerics, "soil"));
-  if (line.rest_kpa > 0) return RunRestTest(line, *rve);
-  if (line.increment_kpa > 0) return RunIncrementStudy(line, *rve);
-  const auto start = std::chrono::steady_clock::now();
-  tiers::SurrogateRecipe recipe;
-  recipe.steps = line.steps;
-  recipe.walks = line.walks;
-  recipe.held_out_walks = line.held_out_walks;
-  if (!line.pressures_kpa.empty()) {
-    recipe.pressures_pa.clear();
-    for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
+  const std::string label = line.soil + ", preset " + line.preset;
+  if (line.rest_kpa > 0) {
+    RunRestTest(*rve, {line.rest_kpa, line.rest_axial_strain, line.rest_steps}, label);
+    return 0;
   }
-  recipe.Validate("");
-  std::vector<tiers::NamedLabPath> training_paths = tiers::TrainingPaths(recipe);
-  // Only the training walks persist; the held-out walks stay the yardstick every model is read by.
-  for (tiers::NamedLabPath& path : training_paths) {
-    if (path.spec.path == ann::LabPath::kRandomWalk) {
-      path.spec.walk_persistence = line.walk_persistence;
-    }
+  if (line.increment_kpa > 0) {
+    RunIncrementStudy(*rve, increment_study, label);
+    return 0;
   }
-  const std::vector<tiers::NamedLabPath> held_out_paths = tiers::HeldOutPaths(recipe);
-  const InternalVariables internal = line.record_fabric || !line.carried.empty()
-                                         ? tiers::RveFabricVariables()
-                                         : InternalVariables{};
-  const std::vector<StrainHistory> training =
-      RunPaths(*rve, training_paths, line.threads, "training", internal);
-  const std::vector<StrainHistory> held_out =
-      RunPaths(*rve, held_out_paths, line.threads, "held-out", internal);
-  const double generation_s = Since(start);
-  std::vector<std::vector<tiers::PackingDifference>> held_out_packings(held_out.size());
-  if (!line.packing_seeds.empty()) {
-    held_out_packings =
-        PrintPackingSpread(line, entry->parameters, preset, held_out_paths, held_out);
-  }
-  std::vector<StrainHistory> training_all = training;
-  std::vector<StrainHistory> held_out_all = held_out;
-  std::vector<std::string> held_out_names;
-  for (const tiers::NamedLabPath& path : held_out_paths) held_out_names.push_back(path.name);
-  std::map<double, FeDeReference> references;
-  if (line.rig_load_n > 0) {
-    const auto rig_start = std::chrono::steady_clock::now();
-    const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(
-        tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n), {}, internal);
-    references[line.rig_load_n] = {recorded.run, Since(rig_start)};
-    const std::vector<StrainHistory> rig_training =
-        tiers::EvenlySpread(recorded.paths, line.rig_points, 0);
-    const int rig_held_out = std::max(1, line.rig_points / 2);
-    const std::vector<StrainHistory> rig_checks = tiers::EvenlySpread(
-        recorded.paths, rig_held_out,
-        static_cast<int>(recorded.paths.size() / (2 * std::max(1, line.rig_points))) + 1);
-    training_all.insert(training_all.end(), rig_training.begin(), rig_training.end());
-    for (std::size_t k = 0; k < rig_checks.size(); ++k) {
-      held_out_all.push_back(rig_checks[k]);
-      held_out_names.push_back("rig point " + std::to_string(k + 1));
-      // Its floor: the path replayed from its initial stress on each other packing.
-      std::vector<tiers::PackingDifference> floors;
-      for (unsigned seed : line.packing_seeds) {
-        const StrainHistory other =
-            tiers::ReplayedOnRve(PackedFrom(entry->parameters, preset, seed), rig_checks[k]);
-        floors.push_back({seed, HistoryDifference(other, rig_checks[k])});
-      }
-      if (!floors.empty()) {
-        std::printf("# %s on the other packings: median %.2f %% (", held_out_names.back().c_str(),
-                    100 * tiers::PackingFloor(floors));
-        for (const tiers::PackingDifference& floor : floors) {
-          std::printf("%s%u %.2f %%", &floor == &floors.front() ? "" : ", ", floor.packing_seed,
-                      100 * floor.difference);
-        }
-        std::printf(")\n");
-      }
-      held_out_packings.push_back(std::move(floors));
-    }
-    std::printf("# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
-                "paths recorded, %zu in training, %zu held out\n",
-                line.rig_load_n, line.preset.c_str(), recorded.run.elements,
-                recorded.run.fe_steps, Since(rig_start), recorded.paths.size(),
-                rig_training.size(), rig_checks.size());
-  }
-  std::size_t steps = 0;
-  for (const StrainHistory& history : training_all) steps += history.steps();
-  std::printf("# soil %s (RVEs of %g grains), preset %s: %zu training paths (%zu steps), %zu "
-              "held-out, generated in %.1f s on %d threads\n",
-              line.soil.c_str(), entry->parameters.Get("grains_per_rve"), line.preset.c_str(),
-              training_all.size(), steps, held_out_all.size(), generation_s, line.threads);
-  if (!line.out.empty()) {
-    std::filesystem::create_directories(line.out);
-    WriteHistoriesNpy(line.out + "/training.npy", training_all);
-    WriteHistoriesNpy(line.out + "/held_out.npy", held_out_all);
-  }
-  Study study{entry->parameters,
-              training_all,
-              held_out_all,
-              held_out_names,
-              held_out_packings,
-              references,
-              tiers::HistoriesHash(training_all),
-              rve,
-              held_out.size()};
+  Study study = GatherStudy(line, entry->parameters, preset, rve);
   std::vector<double> history_weights;
   if (line.walk_share > 0) {
     // Walks and the rest weighed so that the walks' steps carry walk_share of the loss (the rig's
     // recorded paths, after the recipe's, count as the rest).
-    history_weights = tiers::WalkShareWeights(training_paths, training_all, line.walk_share);
+    history_weights =
+        tiers::WalkShareWeights(study.training_paths, study.training, line.walk_share);
     double walk_steps = 0, other_steps = 0, walk_weight = 1;
-    for (std::size_t k = 0; k < training_all.size(); ++k) {
-      const bool walk =
-          k < training_paths.size() && training_paths[k].spec.path == ann::LabPath::kRandomWalk;
-      (walk ? walk_steps : other_steps) += static_cast<double>(training_all[k].steps());
+    for (std::size_t k = 0; k < study.training.size(); ++k) {
+      const bool walk = k < study.training_paths.size() &&
+                        study.training_paths[k].spec.path == ann::LabPath::kRandomWalk;
+      (walk ? walk_steps : other_steps) += static_cast<double>(study.training[k].steps());
       if (walk) walk_weight = history_weights[k];
     }
     std::printf("# the walks' %.0f steps weigh %.3g each, the other %.0f steps 1\n", walk_steps,
                 walk_weight, other_steps);
   }
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
-  for (const std::string& name : held_out_names) std::printf("%s %%,", name.c_str());
+  for (const std::string& name : study.held_out_names) std::printf("%s %%,", name.c_str());
   std::printf("us_per_point_batch_1000\n");
   if (from) {
     // Transfer learning: the given ensemble fine-tuned on this study's data; the rows below train
@@ -715,7 +595,7 @@ int Run(const CommandLine& line) {
   }
   for (const std::string& text : line.architectures) {
     if (text.rfind("gru", 0) == 0) {
-      RunRecurrent(line, text, training_all, held_out_all, history_weights);
+      RunRecurrent(line, text, study.training, study.held_out, history_weights);
       continue;
     }
     MlpArchitecture architecture = ParseArchitecture(text);
@@ -727,7 +607,7 @@ int Run(const CommandLine& line) {
     const auto train_start = std::chrono::steady_clock::now();
     std::vector<TrainingReport> reports;
     const SurrogateEnsemble ensemble =
-        SurrogateEnsemble::Train(training_all, architecture, options, line.members, &reports);
+        SurrogateEnsemble::Train(study.training, architecture, options, line.members, &reports);
     const double train_s = Since(train_start);
     ReportEnsemble(line, study, ensemble, architecture.Describe(), options, reports, train_s, "");
   }
@@ -737,165 +617,9 @@ int Run(const CommandLine& line) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CommandLine line;
+  StudyCommandLine line;
   CLI::App app("gonogo-ann: the stress surrogate's study on a soil's own DE RVE");
-  app.add_option("--soil", line.soil, "dem-hertz-mindlin soil of the catalogue")
-      ->capture_default_str();
-  app.add_option("--preset", line.preset, "fe-de preset whose RVE numerics the paths use")
-      ->capture_default_str();
-  app.add_option("--steps", line.steps, "steps per path after settling")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--held-out-walks", line.held_out_walks,
-                 "random walks in the held-out set (seeds 1001, 1002, ...)")
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  app.add_option("--walks", line.walks, "random walks in the training set")
-      ->check(CLI::Range(0, 10000))
-      ->capture_default_str();
-  app.add_option("--pressures-kpa", line.pressures_kpa,
-                 "confining pressures of the training paths, kPa, increasing (default: "
-                 "2.5 5 10 20 40 80)");
-  app.add_option("--architecture", line.architectures,
-                 "MLP hidden widths joined by x (64x64; the seed's 600x600x600x600x600x600x600), "
-                 "or a GRU and its width (gru32; one network, not an ensemble)")
-      ->capture_default_str();
-  app.add_flag("--unanchored", line.unanchored,
-               "MLPs without the at-rest anchor (d_sigma(0) = 0; stress_surrogate.h)");
-  app.add_option("--pressure-scaled", line.pressure_reference_pa,
-                 "MLPs that see the stress relative to s = max(p, 0) + this reference pressure "
-                 "(Pa) and answer d_sigma / s (stress_surrogate.h); 0: unscaled")
-      ->check(CLI::Range(0.0, 1e7))
-      ->capture_default_str();
-  app.add_option("--rig-load-n", line.rig_load_n,
-                 "record the paths of an fe-de rig run of the preset at this wheel load (N) and "
-                 "train and check on them too (seed 000's step 2); 0: none")
-      ->check(CLI::Range(0.0, 1e7));
-  app.add_option("--rig-diameter-m", line.rig_diameter_m, "the rig wheel's diameter, m")
-      ->check(CLI::Range(0.05, 5.0))
-      ->capture_default_str();
-  app.add_option("--rig-width-m", line.rig_width_m, "the rig wheel's width, m")
-      ->check(CLI::Range(0.01, 2.0))
-      ->capture_default_str();
-  app.add_option("--rig-points", line.rig_points,
-                 "recorded points in the training set (half as many others held out)")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_flag("--record-fabric", line.record_fabric,
-               "the histories --out writes also record, per step, the RVE's coordination number, "
-               "solid fraction and contact fabric (fabric_xx ... fabric_xy; trace 1): for "
-               "studies of what a network might carry (solvers/ann/studies/fabric.py)");
-  app.add_option("--carry", line.carried,
-                 "internal variables of the RVE the MLPs carry as further inputs and outputs "
-                 "(coordination_number, solid_fraction; stress_surrogate.h); the histories record "
-                 "them")
-      ->type_name("NAME");
-  app.add_option("--return-after-steps", line.return_after_steps,
-                 "--validate-load-n's fe-ann runs: a fallen-back point returns to the network "
-                 "after this many FE steps in a row its ensemble would not have flagged (0: never)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--packing-seeds", line.packing_seeds,
-                 "also run the held-out paths on the soil's RVE packed from these seeds (the "
-                 "study's packing is the preset's, seed 1; a held-out rig path replayed from its "
-                 "initial stress) and print their stresses' difference "
-                 "from the study's packing's, measured as a replay's error: the RVE's own spread, "
-                 "the floor under a held-out error; with --register, in the model's record")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--validate-load-n", line.validate_loads_n,
-                 "run each MLP ensemble as the fe-ann tier on the rig at these loads (N) against "
-                 "fe-de");
-  app.add_option("--validate-spread-scales", line.validate_spread_scales,
-                 "--validate-load-n's runs once at each of these multiples of the model's spread "
-                 "threshold (below 1: more points fall back to the RVE)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  app.add_option("--validate-pressure-floors-kpa", line.validate_pressure_floors_kpa,
-                 "--validate-load-n's runs (and the held-out rig paths' guarded replays) once at "
-                 "each of these pressure floors, kPa: a point whose mean compression is below "
-                 "the floor falls back to the RVE (0: none)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--register", line.register_data_dir,
-                 "register each MLP ensemble with its provenance in this gonogo-server data "
-                 "directory (DATA_DIR/models), where the fe-ann tier finds it")
-      ->type_name("DATA_DIR");
-  app.add_option("--from", line.from_model_dir,
-                 "transfer learning: also fine-tune this ensemble (a directory: DATA_DIR/models/ID "
-                 "or --out's) on the study's data, beside the architectures trained from scratch")
-      ->type_name("MODEL_DIR");
-  app.add_option("--tune-learning-rate", line.tune_learning_rate,
-                 "Adam's learning rate when fine-tuning")
-      ->check(CLI::Range(1e-8, 0.5))
-      ->capture_default_str();
-  app.add_option("--rest-kpa", line.rest_kpa,
-                 "only the rest test: the RVE settled at this pressure (kPa), then --rest-steps "
-                 "zero increments; prints its stress as it drifts")
-      ->check(CLI::Range(0.0, 1e6));
-  app.add_option("--rest-axial-strain", line.rest_axial_strain,
-                 "the rest test's compression along z (lateral strains held) before the zero "
-                 "increments: a deviatoric load")
-      ->check(CLI::Range(0.0, 0.2))
-      ->capture_default_str();
-  app.add_option("--rest-steps", line.rest_steps, "zero increments of the rest test")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--increment-kpa", line.increment_kpa,
-                 "only the increment-size study: --increment-path at this pressure (kPa) taken "
-                 "in each of --increment-steps steps; prints p and q along each")
-      ->check(CLI::Range(0.0, 1e6));
-  app.add_option("--increment-path", line.increment_path,
-                 "the increment study's laboratory path (triaxial, simple-shear, ...)")
-      ->capture_default_str();
-  app.add_option("--increment-steps", line.increment_steps, "the increment study's step counts")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--members", line.members, "ensemble members")
-      ->check(CLI::Range(3, 64))
-      ->capture_default_str();
-  app.add_option("--epochs", line.epochs, "training epochs")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  app.add_option("--path-stress-weighting", line.path_stress_weighting,
-                 "each training step's squared error weighed by its path's mean |sigma| to the "
-                 "power -2x: 0 every step alike, 1 relative to the path's stress (MLPs)")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  app.add_option("--rollout-steps", line.rollout_steps,
-                 "a rollout term in the loss: windows of this many steps replayed on the "
-                 "network's own stresses, their error relative to the path's stress (MLPs; 0: "
-                 "none)")
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  app.add_option("--rollout-weight", line.rollout_weight, "the rollout term's weight in the loss")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--stress-noise", line.stress_noise,
-                 "training noise on the stress before each step, its standard deviation a "
-                 "fraction of the path's mean |sigma| (MLPs; 0: none)")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  app.add_option("--noise-correction", line.noise_correction,
-                 "the share of the noise each step's target takes back: 1 ends the step on the "
-                 "recorded stress, 0 as far off as it began")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  app.add_option("--walk-share", line.walk_share,
-                 "the random walks' share of the training loss (their steps weighed to give it); "
-                 "0: their share of the steps")
-      ->check(CLI::Range(0.0, 0.99))
-      ->capture_default_str();
-  app.add_option("--walk-persistence", line.walk_persistence,
-                 "the training walks' correlation of one step's direction with the last's (0: "
-                 "drawn afresh; 0.9: loading on for about 10 steps); held-out walks stay at 0")
-      ->check(CLI::Range(0.0, 0.99))
-      ->capture_default_str();
-  app.add_option("--training-seed", line.training_seed,
-                 "the first member's seed of weights and batch order (member k: seed + k)")
-      ->capture_default_str();
-  app.add_option("--threads", line.threads, "OpenMP threads generating the paths")
-      ->check(CLI::Range(1, 1024))
-      ->capture_default_str();
-  app.add_option("--out", line.out, "directory for the histories (.npy) and the ensembles");
+  AddStudyOptions(app, line);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -6,7 +6,10 @@
 # fabric (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts.
 # A network carrying the coordination number (--carry) is trained; what cannot be carried is
 # refused by name. The RVE's own spread (--packing-seeds): the study's packing (seed 1) against
-# itself is 0 on every held-out path, another packing is not.
+# itself is 0 on every held-out path, another packing is not. The studies of the RVE alone: at
+# rest (--rest-kpa) its stress is printed every tenth zero increment, and the increment-size study
+# (--increment-kpa) prints p and q along each step count; an unknown --increment-path is refused
+# by name.
 set -eu
 ann="$1"
 out="$2"
@@ -87,4 +90,28 @@ if "$ann" --packing-seeds 0 > /dev/null 2> "$out/error.txt"; then
   exit 1
 fi
 grep -q -- "--packing-seeds" "$out/error.txt"
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --rest-kpa 5 \
+  --rest-steps 20 --rest-axial-strain 0.005 > "$out/rest.csv"
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset ci --increment-kpa 10 \
+  --increment-steps 8 > "$out/increment.csv"
+/usr/bin/python3 - "$out/rest.csv" "$out/increment.csv" <<'PYTHON'
+import sys
+rest = [line.strip().split(',') for line in open(sys.argv[1]) if not line.startswith('#')]
+assert rest[0] == ['step', 'p_pa', 'q_pa', 'p_change_pct', 'q_change_pct'], rest[0]
+assert [row[0] for row in rest[1:]] == ['0', '10', '20'], rest
+for step, p, q, p_change, q_change in rest[1:]:
+    # Compressed oedometrically by 0.5 % from 5 kPa: p and q of tens of kPa, held within 1 %.
+    assert 20e3 < float(p) < 200e3 and 10e3 < float(q) < 300e3, (p, q)
+    assert abs(float(p_change)) < 1 and abs(float(q_change)) < 1, (p_change, q_change)
+increment = [line.strip().split(',') for line in open(sys.argv[2]) if not line.startswith('#')]
+assert increment[0] == ['steps', 'fraction', 'strain', 'p_pa', 'q_pa', 'seconds'], increment[0]
+assert len(increment) > 2 and all(row[0] == '8' for row in increment[1:]), increment
+# Sheared from 10 kPa, the packing's deviator rises above the isotropic start's.
+assert max(float(row[4]) for row in increment[1:]) > 10e3, increment
+PYTHON
+if "$ann" --increment-kpa 10 --increment-path bogus > /dev/null 2> "$out/error.txt"; then
+  echo "--increment-path bogus was accepted" >&2
+  exit 1
+fi
+grep -q -- "--increment-path: unknown path 'bogus'" "$out/error.txt"
 echo "ann_cli_test: ok"
