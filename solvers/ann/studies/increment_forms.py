@@ -1,0 +1,225 @@
+#!/usr/bin/env python3
+"""Can another form of network follow a rig point's small steps? Trains, in Python's torch, the
+same three-member MLP (128 x 128 tanh, pressure-scaled at 3 kPa, carrying the coordination
+number, the walks 60 % of the loss, Adam at 1e-3 halved at 50, 75 and 90 % of the epochs, batches
+of 64) on the histories of DIR in one of three forms, and replays DIR's held-out paths open-loop
+(the members' mean increment, the stress turned by each step's rotation, the admissible-stress cap
+and cone), printing each path's error (mean |sigma error| over the path's mean |sigma|):
+
+  smooth       the product's form (stress_surrogate.h): d_sigma = s (N(d_eps, ...) - N(0, ...)),
+               s = max(p, 0) + 3 kPa. A smooth network answers an increment far smaller than its
+               training steps linearly, so a step and its reverse alike but for the sign.
+  homogeneous  d_sigma = s |d_eps| N(d_eps / |d_eps|, ...): positively homogeneous of degree one
+               in the increment, as a rate-independent material's response to a small one is, so
+               a loading and an unloading step may differ at any increment size.
+  homlog       the same with log |d_eps| a further input: the stiffness may also vary with the
+               step's size (a granular soil's stiffness falls as its strain amplitude grows).
+
+--step-size-weighting CAP weighs each step's squared error by (h_ref / |d_eps|)^2, at most CAP^2
+(h_ref the training steps' median |d_eps|): each step's error relative to its own size, so that
+a rig step (|d_eps| about 3e-6) counts as a walk's (about 8e-4) does.
+
+DIR: the --out of `gonogo-ann --rig-load-n W --rig-points N --carry coordination_number`, whose
+training.npy holds the recipe's 16 laboratory paths, then the walks, then the rig's paths, and
+held_out.npy the recipe's held-out paths, then the rig's.
+
+    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog}
+        [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--stiffness-only]
+
+(--stiffness-only: each path kind's median step size and median stiffness |d_sigma| / (s |d_eps|),
+the ranges over its paths, and nothing trained.)
+"""
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+import torch
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from trajectory_spread import RIG_ROWS, Admissible, histories, kinematics, tensors, voigts  # noqa: E402
+
+PRESSURE_REFERENCE_PA = 3000.0
+WALK_SHARE = 0.6
+LABORATORY_PATHS = 16  # the recipe's training paths before its walks
+
+
+def strain_norm(d):
+    """|d_eps| of (n, 6) Voigt strain rows with engineering shears, as (n, 1)."""
+    return torch.sqrt((d[:, :3] ** 2).sum(1, keepdim=True) +
+                      0.5 * (d[:, 3:] ** 2).sum(1, keepdim=True))
+
+
+def pressure_scale(x):
+    """s = max(p, 0) + p_ref of raw input rows [d_eps, sigma, eps, Z], as (n, 1)."""
+    return torch.clamp(-x[:, 6:9].sum(1, keepdim=True) / 3, min=0) + PRESSURE_REFERENCE_PA
+
+
+def steps_of(rows, z_column):
+    """A history's raw inputs [d_eps, sigma_n, eps_n, Z_n] and changes [d_sigma, d_Z]."""
+    increments, rotations = kinematics(rows[1:, 2:11].reshape(-1, 3, 3))
+    before, after = rows[:-1, 11:17], rows[1:, 11:17]
+    accumulated = np.vstack([np.zeros(6), np.cumsum(increments, 0)[:-1]])
+    x = np.hstack([increments, before, accumulated, rows[:-1, z_column:z_column + 1]])
+    turned = voigts(rotations @ tensors(before) @ np.swapaxes(rotations, -1, -2))
+    y = np.hstack([after - turned, rows[1:, z_column:z_column + 1] - rows[:-1, z_column:z_column + 1]])
+    return x, y
+
+
+def print_stiffness(training, is_walk, held_out, z_column):
+    """Per path kind, the median step size |d_eps| and stiffness |d_sigma| / (s |d_eps|)."""
+    def medians(rows):
+        x, y = (torch.from_numpy(a) for a in steps_of(rows, z_column))
+        size = strain_norm(x[:, :6])[:, 0]
+        change = torch.linalg.norm(torch.from_numpy(tensors(y[:, :6].numpy())), dim=(-2, -1))
+        moved = size > 0
+        return (float(size.median()),
+                float((change[moved] / (pressure_scale(x)[moved, 0] * size[moved])).median()))
+    kinds = {'training walks': [r for r, w in zip(training, is_walk) if w],
+             'training rig paths': [r for r in training if len(r) == RIG_ROWS],
+             'held-out walks': [r for r in held_out[3:] if len(r) != RIG_ROWS],
+             'held-out rig paths': [r for r in held_out if len(r) == RIG_ROWS]}
+    for kind, paths in kinds.items():
+        figures = np.array([medians(rows) for rows in paths])
+        print(f'{kind} ({len(paths)}): median |d_eps| {figures[:, 0].min():.2g}-'
+              f'{figures[:, 0].max():.2g}, median |d_sigma| / (s |d_eps|) '
+              f'{figures[:, 1].min():.0f}-{figures[:, 1].max():.0f}')
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('directory')
+    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog'])
+    parser.add_argument('--epochs', type=int, default=200)
+    parser.add_argument('--seed', type=int, default=2)
+    parser.add_argument('--members', type=int, default=3)
+    parser.add_argument('--step-size-weighting', type=float, default=0, metavar='CAP')
+    parser.add_argument('--stiffness-only', action='store_true',
+                        help="print the paths' step sizes and stiffnesses only, no training")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    torch.set_default_dtype(torch.float64)
+    directory, form = args.directory, args.form
+    columns = open(f'{directory}/training.npy.columns.txt').read().split()
+    z_column = columns.index('coordination_number')
+
+    training = histories(np.load(f'{directory}/training.npy'))
+    is_walk = [k >= LABORATORY_PATHS and len(rows) != RIG_ROWS for k, rows in enumerate(training)]
+    walk_steps = sum(len(rows) - 1 for rows, walk in zip(training, is_walk) if walk)
+    other_steps = sum(len(rows) - 1 for rows in training) - walk_steps
+    walk_weight = WALK_SHARE / (1 - WALK_SHARE) * other_steps / walk_steps
+    xs, ys, ws = [], [], []
+    for rows, walk in zip(training, is_walk):
+        x, y = steps_of(rows, z_column)
+        xs.append(x)
+        ys.append(y)
+        ws.append(np.full(len(x), walk_weight if walk else 1.0))
+    if args.stiffness_only:
+        print_stiffness(training, is_walk, histories(np.load(f'{directory}/held_out.npy')),
+                        z_column)
+        return
+    X, Y, W = (torch.from_numpy(np.concatenate(a)) for a in (xs, ys, ws))
+    W = W / W.mean()
+    step_reference = float(strain_norm(X[:, :6]).median())
+
+    def features(x):
+        d = x[:, :6]
+        extra = []
+        if form != 'smooth':
+            h = strain_norm(d)
+            d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
+            if form == 'homlog':
+                extra = [torch.log(torch.clamp(h, min=1e-12) / step_reference)]
+        s = pressure_scale(x)
+        return torch.cat([d, x[:, 6:12] / s, x[:, 12:], torch.log(s / PRESSURE_REFERENCE_PA)] +
+                         extra, 1)
+
+    F = features(X)
+    T = torch.cat([Y[:, :6] / pressure_scale(X), Y[:, 6:]], 1)  # d_sigma / s, d_Z
+    in_mean, in_scale = F.mean(0), F.std(0, unbiased=False)
+    in_scale[in_scale < 1e-12] = 1
+    out_scale = T.std(0, unbiased=False)
+    magnitude = strain_norm(X[:, :6]) / step_reference
+    direction_scale = (T / torch.clamp(magnitude, min=1e-12)).std(0, unbiased=False)
+
+    class Member(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.net = torch.nn.Sequential(
+                torch.nn.Linear(F.shape[1], 128), torch.nn.Tanh(), torch.nn.Linear(128, 128),
+                torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
+
+        def forward(self, f, x):  # in T's units
+            if form != 'smooth':
+                return (strain_norm(x[:, :6]) / step_reference *
+                        self.net((f - in_mean) / in_scale) * direction_scale)
+            rest = f.clone()
+            rest[:, :6] = 0  # anchored: no increment, no change
+            return (self.net((f - in_mean) / in_scale) -
+                    self.net((rest - in_mean) / in_scale)) * out_scale
+
+        def answer(self, x):  # d_sigma in Pa, d_Z
+            t = self.forward(features(x), x)
+            return torch.cat([t[:, :6] * pressure_scale(x), t[:, 6:]], 1)
+
+    def train(seed):
+        torch.manual_seed(seed)
+        member = Member()
+        optimiser = torch.optim.Adam(member.parameters(), lr=1e-3)
+        for epoch in range(args.epochs):
+            if epoch in (args.epochs // 2, args.epochs * 3 // 4, args.epochs * 9 // 10):
+                for group in optimiser.param_groups:
+                    group['lr'] /= 2
+            order = torch.randperm(len(X))
+            for start in range(0, len(X), 64):
+                i = order[start:start + 64]
+                error = (member(F[i], X[i]) - T[i]) / out_scale
+                if args.step_size_weighting > 0:
+                    error = error / torch.clamp(magnitude[i], min=1 / args.step_size_weighting)
+                loss = (W[i, None] * error ** 2).mean()
+                optimiser.zero_grad()
+                loss.backward()
+                optimiser.step()
+        with torch.no_grad():
+            return member, float((W[:, None] * ((member(F, X) - T) / out_scale) ** 2).mean())
+
+    start = time.time()
+    members = []
+    for k in range(args.members):
+        member, loss = train(args.seed + k)
+        members.append(member)
+        print(f'# member {k}: loss {loss:.4g} (unweighted by step size), {time.time() - start:.0f} s',
+              flush=True)
+
+    admissible = Admissible(X[:, 6:12].numpy())
+    held_out = histories(np.load(f'{directory}/held_out.npy'))
+    laboratory = [h for h in held_out if len(h) != RIG_ROWS]
+    names = (['triaxial', 'simple shear', 'unload-reload'] +
+             [f'walk {k + 1}' for k in range(len(laboratory) - 3)] +
+             [f'rig point {k + 1}' for k in range(len(held_out) - len(laboratory))])
+    figures = []
+    for name, rows in zip(names, held_out):
+        increments, rotations = kinematics(rows[1:, 2:11].reshape(-1, 3, 3))
+        stress, z, accumulated = rows[0, 11:17].copy(), rows[0, z_column], np.zeros(6)
+        replayed = []
+        for step in range(len(increments)):
+            x = torch.from_numpy(np.hstack([increments[step], stress, accumulated, [z]])[None])
+            with torch.no_grad():
+                change = np.mean([m.answer(x).numpy() for m in members], 0)[0]
+            turned = rotations[step] @ tensors(stress) @ rotations[step].T
+            stress = admissible((voigts(turned) + change[:6])[None])[0]
+            z += change[6]
+            accumulated = accumulated + increments[step]
+            replayed.append(stress.copy())
+        recorded = rows[1:, 11:17]
+        error = (np.linalg.norm(tensors(np.array(replayed) - recorded), axis=(-1, -2)).mean() /
+                 np.linalg.norm(tensors(recorded), axis=(-1, -2)).mean())
+        figures.append(f'{name} {100 * error:.2f} %')
+    weighting = (f', step sizes weighed up to x{args.step_size_weighting:g}'
+                 if args.step_size_weighting > 0 else '')
+    print(f'{form}, {args.epochs} epochs, seed {args.seed}{weighting}: ' + ', '.join(figures))
+
+
+if __name__ == '__main__':
+    main()
