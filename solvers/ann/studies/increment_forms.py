@@ -14,6 +14,8 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
                a loading and an unloading step may differ at any increment size.
   homlog       the same with log |d_eps| a further input: the stiffness may also vary with the
                step's size (a granular soil's stiffness falls as its strain amplitude grows).
+  hybrid       the smooth form plus a homogeneous term of a second network of the same size:
+               d_sigma = s (N(d_eps, ...) - N(0, ...) + |d_eps| M(d_eps / |d_eps|, ...)).
 
 --step-size-weighting CAP weighs each step's squared error by (h_ref / |d_eps|)^2, at most CAP^2
 (h_ref the training steps' median |d_eps|): each step's error relative to its own size, so that
@@ -90,7 +92,7 @@ def print_stiffness(training, is_walk, held_out, z_column):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
-    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog'])
+    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -123,10 +125,10 @@ def main():
     W = W / W.mean()
     step_reference = float(strain_norm(X[:, :6]).median())
 
-    def features(x):
+    def features(x, form=form):
         d = x[:, :6]
         extra = []
-        if form != 'smooth':
+        if form not in ('smooth', 'hybrid'):
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
@@ -136,6 +138,9 @@ def main():
                          extra, 1)
 
     F = features(X)
+    F_direction = features(X, 'homogeneous')  # the hybrid's second network's
+    direction_mean, direction_scale_in = F_direction.mean(0), F_direction.std(0, unbiased=False)
+    direction_scale_in[direction_scale_in < 1e-12] = 1
     T = torch.cat([Y[:, :6] / pressure_scale(X), Y[:, 6:]], 1)  # d_sigma / s, d_Z
     in_mean, in_scale = F.mean(0), F.std(0, unbiased=False)
     in_scale[in_scale < 1e-12] = 1
@@ -150,7 +155,20 @@ def main():
                 torch.nn.Linear(F.shape[1], 128), torch.nn.Tanh(), torch.nn.Linear(128, 128),
                 torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
 
+            if form == 'hybrid':
+                self.direction_net = torch.nn.Sequential(
+                    torch.nn.Linear(F_direction.shape[1], 128), torch.nn.Tanh(),
+                    torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
+
         def forward(self, f, x):  # in T's units
+            if form == 'hybrid':
+                rest = f.clone()
+                rest[:, :6] = 0
+                direction = (features(x, 'homogeneous') - direction_mean) / direction_scale_in
+                return ((self.net((f - in_mean) / in_scale) -
+                         self.net((rest - in_mean) / in_scale)) * out_scale +
+                        strain_norm(x[:, :6]) / step_reference * self.direction_net(direction) *
+                        out_scale)
             if form != 'smooth':
                 return (strain_norm(x[:, :6]) / step_reference *
                         self.net((f - in_mean) / in_scale) * direction_scale)
