@@ -16,6 +16,10 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
                step's size (a granular soil's stiffness falls as its strain amplitude grows).
   hybrid       the smooth form plus a homogeneous term of a second network of the same size:
                d_sigma = s (N(d_eps, ...) - N(0, ...) + |d_eps| M(d_eps / |d_eps|, ...)).
+  shared       the same two terms from one network of twice the outputs, which sees the
+               increment and its direction: d_sigma = s (A(x) - A(x_0) + |d_eps| B(x)), [A, B] =
+               N(d_eps, d_eps / |d_eps|, ...), x_0 the same with no increment; as costly as the
+               smooth form (two passes).
 
 --step-size-weighting CAP weighs each step's squared error by (h_ref / |d_eps|)^2, at most CAP^2
 (h_ref the training steps' median |d_eps|): each step's error relative to its own size, so that
@@ -92,7 +96,7 @@ def print_stiffness(training, is_walk, held_out, z_column):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
-    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid'])
+    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'shared'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -126,6 +130,8 @@ def main():
     step_reference = float(strain_norm(X[:, :6]).median())
 
     def features(x, form=form):
+        if form == 'shared':
+            return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
         if form not in ('smooth', 'hybrid'):
@@ -151,9 +157,10 @@ def main():
     class Member(torch.nn.Module):
         def __init__(self):
             super().__init__()
+            outputs = T.shape[1] * (2 if form == 'shared' else 1)
             self.net = torch.nn.Sequential(
                 torch.nn.Linear(F.shape[1], 128), torch.nn.Tanh(), torch.nn.Linear(128, 128),
-                torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
+                torch.nn.Tanh(), torch.nn.Linear(128, outputs))
 
             if form == 'hybrid':
                 self.direction_net = torch.nn.Sequential(
@@ -161,6 +168,15 @@ def main():
                     torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
 
         def forward(self, f, x):  # in T's units
+            if form == 'shared':
+                rest = f.clone()
+                rest[:, :6] = 0  # no increment, and so no direction
+                rest[:, 6:12] = 0
+                n = T.shape[1]
+                at = self.net((f - in_mean) / in_scale)
+                at_rest = self.net((rest - in_mean) / in_scale)
+                return ((at[:, :n] - at_rest[:, :n]) * out_scale +
+                        strain_norm(x[:, :6]) / step_reference * at[:, n:] * out_scale)
             if form == 'hybrid':
                 rest = f.clone()
                 rest[:, :6] = 0
