@@ -112,6 +112,10 @@ def main():
 
     training = histories(np.load(f'{directory}/training.npy'))
     is_walk = [k >= LABORATORY_PATHS and len(rows) != RIG_ROWS for k, rows in enumerate(training)]
+    if args.stiffness_only:
+        print_stiffness(training, is_walk, histories(np.load(f'{directory}/held_out.npy')),
+                        z_column)
+        return
     walk_steps = sum(len(rows) - 1 for rows, walk in zip(training, is_walk) if walk)
     other_steps = sum(len(rows) - 1 for rows in training) - walk_steps
     walk_weight = WALK_SHARE / (1 - WALK_SHARE) * other_steps / walk_steps
@@ -121,10 +125,6 @@ def main():
         xs.append(x)
         ys.append(y)
         ws.append(np.full(len(x), walk_weight if walk else 1.0))
-    if args.stiffness_only:
-        print_stiffness(training, is_walk, histories(np.load(f'{directory}/held_out.npy')),
-                        z_column)
-        return
     X, Y, W = (torch.from_numpy(np.concatenate(a)) for a in (xs, ys, ws))
     W = W / W.mean()
     step_reference = float(strain_norm(X[:, :6]).median())
