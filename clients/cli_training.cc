@@ -226,6 +226,11 @@ Command AddTrainCommand(CLI::App& parent) {
           "the network sees the stress relative to max(p, 0) + this reference pressure and "
           "answers d_sigma relative to it (solvers/ann/README.md) [default: 0, unscaled]")
       ->type_name("PA");
+  train->add_flag_function(
+      "--hybrid", [&r](int64_t) { r.set_hybrid(true); },
+      "each member also has a second network's term homogeneous in the strain increment "
+      "(solvers/ann/README.md; off by default: it replays the rig's unloading closer and moves "
+      "the curve further from fe-de's)");
   train
       ->add_option_function<double>(
           "--walk-share", [&r](double v) { r.set_walk_share(v); },

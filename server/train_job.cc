@@ -103,6 +103,11 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   Require(!(fine_tuning && request.pressure_reference_pa() != 0), "pressure_reference_pa",
           "a fine-tuned model keeps its base model's pressure scaling");
   recipe.architecture.pressure_reference_pa = request.pressure_reference_pa();
+  Require(!(fine_tuning && request.hybrid()), "hybrid",
+          "a fine-tuned model keeps its base model's form");
+  Require(!(request.hybrid() && request.unanchored()), "hybrid",
+          "needs the anchored network (not unanchored)");
+  recipe.architecture.homogeneous_term = request.hybrid();
   recipe.walk_share = request.walk_share();
   recipe.architecture.Validate("");
   if (request.carried_variables_size() > 0) {
@@ -362,6 +367,8 @@ v1::Job JobManager::SubmitTraining(const std::string& id, const std::string& own
     Require(base->fe_de_preset == config_.fe_de_preset, "from_model",
             "model '" + base->id + "' was trained on RVEs of the " + base->fe_de_preset +
                 " configuration; this server runs " + config_.fe_de_preset);
+    Require(base->architecture.find("-hybrid") == std::string::npos, "from_model",
+            "model '" + base->id + "' has the homogeneous term (hybrid), which is not fine-tuned");
     recorded = CarriedOfArchitecture(base->architecture);
   }
   if (request.fallback_paths_share() > 0) {
@@ -700,6 +707,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     member_work.set_learning_rate(recipe.training.learning_rate);
     member_work.set_anchored(recipe.architecture.anchored);
     member_work.set_pressure_reference_pa(recipe.architecture.pressure_reference_pa);
+    member_work.set_homogeneous_term(recipe.architecture.homogeneous_term);
     for (int width : recipe.architecture.hidden_widths) member_work.add_hidden_widths(width);
     for (const std::string& name : recipe.architecture.carried_variables) {
       member_work.add_carried_variables(name);

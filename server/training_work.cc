@@ -78,6 +78,7 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
     architecture.hidden_widths.assign(work.hidden_widths().begin(), work.hidden_widths().end());
     architecture.anchored = work.anchored();
     architecture.pressure_reference_pa = work.pressure_reference_pa();
+    architecture.homogeneous_term = work.homogeneous_term();
     architecture.carried_variables.assign(work.carried_variables().begin(),
                                           work.carried_variables().end());
     architecture.Validate("training.train_member.");

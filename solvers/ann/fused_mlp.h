@@ -29,6 +29,12 @@ struct FusedMlp {
   // features and its stress outputs (and their tangent) are multiplied back by each point's
   // s = max(p_n, 0) + p_ref (stress_surrogate.h).
   double pressure_reference_pa = 0;
+  // MlpArchitecture::homogeneous_term: the second network's weights (empty: none), its inputs'
+  // standardisation, h_ref and delta.
+  std::vector<Eigen::MatrixXd> direction_weights;
+  std::vector<Eigen::VectorXd> direction_biases;
+  Eigen::VectorXd direction_in_mean, direction_in_scale;
+  double step_reference = 1, step_delta = 0;
 
   // raw_inputs: (18 + V) x N (one point per column, V carried internal variables last); returns
   // (6 + V) x N: d_sigma (Pa), then the carried variables' increments; with `tangents`, one 6 x 6

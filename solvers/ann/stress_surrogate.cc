@@ -7,10 +7,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <map>
-#include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "solvers/ann/fused_mlp.h"
 #include "solvers/common/errors.h"
@@ -20,6 +21,8 @@ namespace {
 
 constexpr int kInputs = 18;  // without carried internal variables
 constexpr int kOutputs = 6;  // d_sigma; the carried variables' increments follow
+// MlpArchitecture::homogeneous_term's delta: far below an FE point's increment (2e-6 on the rig).
+constexpr double kStepDelta = 1e-7;
 
 std::string Joined(const std::vector<std::string>& names, const std::string& separator) {
   std::string joined;
@@ -180,6 +183,29 @@ torch::Tensor Features(const torch::Tensor& raw, double reference_pa) {
                     1);
 }
 
+// r = sqrt(|d_eps|^2 + delta^2) of raw input rows, (N, 1); |d_eps|^2 the normal components'
+// squares plus half the engineering shears' (MlpArchitecture::homogeneous_term).
+torch::Tensor IncrementRadius(const torch::Tensor& raw, double delta) {
+  return (raw.slice(1, 0, 3).pow(2).sum(1, /*keepdim=*/true) +
+          0.5 * raw.slice(1, 3, 6).pow(2).sum(1, /*keepdim=*/true) + delta * delta)
+      .sqrt();
+}
+
+// What the homogeneous term's network sees: Features with the increment's direction d_eps / r in
+// place of the increment.
+torch::Tensor DirectionFeatures(const torch::Tensor& raw, double reference_pa, double delta) {
+  return torch::cat(
+      {raw.slice(1, 0, 6) / IncrementRadius(raw, delta), Features(raw, reference_pa).slice(1, 6)},
+      1);
+}
+
+// The homogeneous term's second network, for ScriptModule (empty weights: none).
+struct DirectionNetwork {
+  std::vector<torch::Tensor> weights, biases;
+  torch::Tensor in_mean, in_scale;
+  double step_reference = 1;
+};
+
 // The TorchScript module: standardise, the tanh layers, the linear output, back to Pa. Anchored:
 // the same network at rest (the strain increment zeroed) subtracted, so that d_sigma(0) = 0.
 // Pressure-scaled (reference_pa > 0): the network sees Features and its stress outputs are
@@ -189,7 +215,8 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
                                 const torch::Tensor& in_mean, const torch::Tensor& in_scale,
                                 const torch::Tensor& out_mean, const torch::Tensor& out_scale,
                                 const std::string& architecture, bool anchored,
-                                const std::vector<std::string>& carried, double reference_pa) {
+                                const std::vector<std::string>& carried, double reference_pa,
+                                const DirectionNetwork& direction = {}) {
   torch::jit::Module module("StressSurrogate");
   module.register_attribute("carried_variables", c10::StringType::get(), Joined(carried, ","));
   module.register_buffer("in_mean", in_mean.detach().clone());
@@ -209,6 +236,24 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
            << ".t()) + self." << b << (last ? "" : ")") << "\n";
   }
   source << "    return h\n";
+  const bool hybrid = !direction.weights.empty();
+  if (hybrid) {
+    module.register_buffer("direction_in_mean", direction.in_mean.detach().clone());
+    module.register_buffer("direction_in_scale", direction.in_scale.detach().clone());
+    module.register_attribute("step_reference", c10::FloatType::get(), direction.step_reference);
+    module.register_attribute("step_delta", c10::FloatType::get(), kStepDelta);
+    source << "def direction_network(self, x):\n"
+           << "    h = (x - self.direction_in_mean) / self.direction_in_scale\n";
+    for (std::size_t layer = 0; layer < direction.weights.size(); ++layer) {
+      const std::string w = "v" + std::to_string(layer), b = "c" + std::to_string(layer);
+      module.register_parameter(w, direction.weights[layer].detach().clone(), false);
+      module.register_parameter(b, direction.biases[layer].detach().clone(), false);
+      const bool last = layer + 1 == direction.weights.size();
+      source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
+             << ".t()) + self." << b << (last ? "" : ")") << "\n";
+    }
+    source << "    return h\n";
+  }
   const bool scaled = reference_pa > 0;
   if (scaled) {
     module.register_attribute("pressure_reference_pa", c10::FloatType::get(), reference_pa);
@@ -222,7 +267,16 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
   } else {
     source << "def forward(self, x):\n";
   }
-  if (anchored) {
+  if (anchored && hybrid) {
+    // The increment's radius from the raw rows (x holds them unchanged in its first six columns).
+    source << "    rest = torch.cat([torch.zeros_like(x[:, 0:6]), x[:, 6:]], 1)\n"
+           << "    r = torch.sqrt((x[:, 0:3] * x[:, 0:3]).sum(1, keepdim=True) + 0.5 * "
+              "(x[:, 3:6] * x[:, 3:6]).sum(1, keepdim=True) + self.step_delta * "
+              "self.step_delta)\n"
+           << "    direction = torch.cat([x[:, 0:6] / r, x[:, 6:]], 1)\n"
+           << "    y = (self.network(x) - self.network(rest) + (r - self.step_delta) / "
+              "self.step_reference * self.direction_network(direction)) * self.out_scale\n";
+  } else if (anchored) {
     source << "    rest = torch.cat([torch.zeros_like(x[:, 0:6]), x[:, 6:]], 1)\n"
            << "    y = (self.network(x) - self.network(rest)) * self.out_scale\n";
   } else {
@@ -272,6 +326,27 @@ FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architectu
   fused.anchored = architecture.find("-anchored") != std::string::npos;
   fused.pressure_reference_pa =
       module.hasattr("pressure_reference_pa") ? module.attr("pressure_reference_pa").toDouble() : 0;
+  for (int layer = 0; module.hasattr("v" + std::to_string(layer)); ++layer) {
+    const torch::Tensor w = module.attr("v" + std::to_string(layer))
+                                .toTensor()
+                                .detach()
+                                .to(torch::kFloat64)
+                                .contiguous();
+    Eigen::MatrixXd weights(w.size(0), w.size(1));
+    const double* data = w.data_ptr<double>();
+    for (Eigen::Index r = 0; r < weights.rows(); ++r) {
+      for (Eigen::Index c = 0; c < weights.cols(); ++c)
+        weights(r, c) = data[r * weights.cols() + c];
+    }
+    fused.direction_weights.push_back(std::move(weights));
+    fused.direction_biases.push_back(VectorOf(module.attr("c" + std::to_string(layer)).toTensor()));
+  }
+  if (!fused.direction_weights.empty()) {
+    fused.direction_in_mean = VectorOf(module.attr("direction_in_mean").toTensor());
+    fused.direction_in_scale = VectorOf(module.attr("direction_in_scale").toTensor());
+    fused.step_reference = module.attr("step_reference").toDouble();
+    fused.step_delta = module.attr("step_delta").toDouble();
+  }
   return fused;
 }
 
@@ -299,6 +374,9 @@ void MlpArchitecture::Validate(const std::string& field_prefix) const {
         (pressure_reference_pa >= 1 && pressure_reference_pa <= 1e7))) {
     throw InputError(field_prefix + "pressure_reference_pa",
                      "must be 0 (no scaling) or in [1, 1e7] Pa");
+  }
+  if (homogeneous_term && !anchored) {
+    throw InputError(field_prefix + "homogeneous_term", "needs the anchored network");
   }
   if (carried_variables.size() > 16) {
     throw InputError(field_prefix + "carried_variables", "at most 16");
@@ -329,6 +407,7 @@ std::string MlpArchitecture::Describe() const {
     name += (k ? "x" : "") + std::to_string(hidden_widths[k]);
   }
   name += anchored ? "-tanh-anchored" : "-tanh";
+  if (homogeneous_term) name += "-hybrid";
   if (pressure_reference_pa > 0) {
     std::ostringstream reference;
     reference << pressure_reference_pa;
@@ -424,6 +503,7 @@ StressSurrogate StressSurrogate::FineTune(const StressSurrogate& base,
   architecture.anchored = base.impl_->fused.anchored;
   architecture.pressure_reference_pa = base.impl_->fused.pressure_reference_pa;
   architecture.carried_variables = base.impl_->carried;
+  architecture.homogeneous_term = !base.impl_->fused.direction_weights.empty();
   return TrainFrom(histories, architecture, options, report, &base);
 }
 
@@ -526,6 +606,30 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   torch::Tensor rest = features.clone();
   rest.slice(1, 0, 6).zero_();
   const torch::Tensor xs_rest = (rest - in_mean) / in_scale;
+  // MlpArchitecture::homogeneous_term: the second network's standardised inputs, and each step's
+  // gain (r - delta) / h_ref.
+  const bool hybrid = architecture.homogeneous_term;
+  DirectionNetwork direction;
+  torch::Tensor direction_inputs, gain;
+  if (hybrid) {
+    if (rollout_steps > 0 || noisy) {
+      throw InputError("architecture.homogeneous_term",
+                       "is not trained with the rollout term or training noise");
+    }
+    if (base != nullptr) {
+      throw InputError("model", "a network with the homogeneous term is not fine-tuned yet");
+    }
+    const torch::Tensor radius = IncrementRadius(x, kStepDelta);
+    direction.step_reference =
+        (radius.pow(2) - kStepDelta * kStepDelta).clamp_min(0).sqrt().median().item<double>();
+    if (!(direction.step_reference > 0)) {
+      throw InputError("histories", "half the steps or more have no strain increment");
+    }
+    const torch::Tensor direction_features = DirectionFeatures(x, reference_pa, kStepDelta);
+    std::tie(direction.in_mean, direction.in_scale) = Standardisation(direction_features);
+    direction_inputs = (direction_features - direction.in_mean) / direction.in_scale;
+    gain = (radius - kStepDelta) / direction.step_reference;
+  }
 
   const torch::Tensor step_weights = StepWeights(path_stress_pa, history_weight, options);
   const int carried_count = static_cast<int>(carried.size());
@@ -567,6 +671,24 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
   layers.push_back(torch::nn::Linear(width, outputs));
   net->push_back(layers.back());
   net->to(torch::kFloat64);
+  torch::nn::Sequential direction_net;  // MlpArchitecture::homogeneous_term's M, N's widths
+  std::vector<torch::nn::Linear> direction_layers;
+  std::vector<torch::Tensor> parameters = net->parameters();
+  if (hybrid) {
+    int direction_width = kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
+    for (int hidden : architecture.hidden_widths) {
+      direction_layers.push_back(torch::nn::Linear(direction_width, hidden));
+      direction_net->push_back(direction_layers.back());
+      direction_net->push_back(torch::nn::Tanh());
+      direction_width = hidden;
+    }
+    direction_layers.push_back(torch::nn::Linear(direction_width, outputs));
+    direction_net->push_back(direction_layers.back());
+    direction_net->to(torch::kFloat64);
+    for (const torch::Tensor& parameter : direction_net->parameters()) {
+      parameters.push_back(parameter);
+    }
+  }
   if (base != nullptr) {  // start from the base's weights
     torch::NoGradGuard no_grad;
     const torch::jit::Module& module = base->impl_->module;
@@ -576,7 +698,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     }
   }
 
-  torch::optim::Adam optimizer(net->parameters(), torch::optim::AdamOptions(options.learning_rate));
+  torch::optim::Adam optimizer(parameters, torch::optim::AdamOptions(options.learning_rate));
   const std::int64_t samples = xs.size(0);
   TrainingReport figures;
   figures.samples = samples;
@@ -674,6 +796,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       }
       torch::Tensor predicted = net->forward(batch_inputs);
       if (architecture.anchored) predicted = predicted - net->forward(batch_inputs_at_rest);
+      if (hybrid) {
+        predicted = predicted + gain.index_select(0, batch) *
+                                    direction_net->forward(direction_inputs.index_select(0, batch));
+      }
       torch::Tensor loss = step_weights.defined()
                                ? ((predicted - batch_answers).pow(2) *
                                   step_weights.index_select(0, batch).unsqueeze(1))
@@ -699,10 +825,14 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     weights.push_back(layer->weight);
     biases.push_back(layer->bias);
   }
-  auto impl = std::make_unique<Impl>(
-      Impl{ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
-                        architecture.Describe(), architecture.anchored, carried, reference_pa),
-           architecture.Describe(), FusedMlp{}, carried});
+  for (const torch::nn::Linear& layer : direction_layers) {
+    direction.weights.push_back(layer->weight);
+    direction.biases.push_back(layer->bias);
+  }
+  auto impl = std::make_unique<Impl>(Impl{
+      ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale, architecture.Describe(),
+                   architecture.anchored, carried, reference_pa, direction),
+      architecture.Describe(), FusedMlp{}, carried});
   impl->fused = FusedOf(impl->module, impl->architecture);
   figures.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

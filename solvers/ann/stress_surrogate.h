@@ -60,8 +60,21 @@ struct MlpArchitecture {
   // held-out metric's scale). p_ref keeps s away from 0 at a point with no stress. The saved
   // module takes and answers the raw inputs and outputs all the same.
   double pressure_reference_pa = 0;
+  // A second network's term, homogeneous of degree one in the increment (the hybrid; off by
+  // default):
+  //   d_sigma = s (N(d_eps, x) - N(0, x) + g M(n, x)),
+  //   r = sqrt(|d_eps|^2 + delta^2), g = (r - delta) / h_ref, n = d_eps / r,
+  // |d_eps| the strain increment's tensor norm (engineering shears halved), h_ref the training
+  // steps' median |d_eps|, delta 1e-7 (far below an FE point's increment), M a network of N's
+  // widths that sees n in place of d_eps. A smooth network answers an increment far smaller than
+  // its training steps linearly, a step and its reverse alike but for the sign; the term may
+  // answer them otherwise at any size, as a packing unloads more stiffly than it loads. delta
+  // makes it differentiable at a zero increment, where its tangent is 0. README: "A rig step is
+  // answered linearly".
+  bool homogeneous_term = false;
   void Validate(const std::string& field_prefix) const;
-  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-pressure-scaled-<p_ref>pa"
+  // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-hybrid" with the homogeneous
+  // term, then "-pressure-scaled-<p_ref>pa"
   // when scaled, then "-carrying-" and the carried variables joined by "+" when there are any.
   std::string Describe() const;
 };

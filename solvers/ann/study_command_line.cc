@@ -24,6 +24,9 @@ void AddStudyOptions(CLI::App& app, StudyCommandLine& line) {
                  "MLP hidden widths joined by x (64x64; the seed's 600x600x600x600x600x600x600), "
                  "or a GRU and its width (gru32; one network, not an ensemble)")
       ->capture_default_str();
+  app.add_flag("--hybrid", line.hybrid,
+               "MLPs with a second network's term homogeneous in the strain increment beside the "
+               "anchored one (MlpArchitecture::homogeneous_term)");
   app.add_flag("--unanchored", line.unanchored,
                "MLPs without the at-rest anchor (d_sigma(0) = 0; stress_surrogate.h)");
   app.add_option("--pressure-scaled", line.pressure_reference_pa,

@@ -19,6 +19,7 @@ struct StudyCommandLine {
   int held_out_walks = tiers::SurrogateRecipe().held_out_walks;
   std::vector<double> pressures_kpa;  // empty: the recipe's
   bool unanchored = false;
+  bool hybrid = false;               // MlpArchitecture::homogeneous_term
   double pressure_reference_pa = 0;  // MlpArchitecture::pressure_reference_pa
   double rig_load_n = 0;             // 0: no rig paths
   double rig_diameter_m = 0.5;

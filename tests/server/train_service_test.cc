@@ -124,6 +124,25 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_NE(second.out.find("mlp-16x16-tanh-pressure-scaled-500pa, 3 members"), std::string::npos)
       << second.out;
 
+  // The hybrid (a second network's term homogeneous in the increment) on the same data.
+  const CliRun hybrid =
+      Gonogo(server.endpoint(),
+             std::string("train ") + kRecipe + " --hidden 16x16 --hybrid --pressure-scaled 500");
+  ASSERT_EQ(hybrid.exit_code, 0) << hybrid.out;
+  EXPECT_NE(hybrid.out.find("tasks 30/30  cache hits 27"), std::string::npos) << hybrid.out;
+  EXPECT_NE(hybrid.out.find("mlp-16x16-tanh-anchored-hybrid-pressure-scaled-500pa, 3 members"),
+            std::string::npos)
+      << hybrid.out;
+  const std::string hybrid_model = RegisteredId(hybrid.out);
+  const CliRun hybrid_fine_tuned =
+      Gonogo(server.endpoint(), "train --soil seed000_sand_rve100 --from " + hybrid_model);
+  EXPECT_EQ(hybrid_fine_tuned.exit_code, 3) << hybrid_fine_tuned.out;
+  EXPECT_NE(hybrid_fine_tuned.out.find("from_model: model '" + hybrid_model +
+                                       "' has the homogeneous term (hybrid), which is not "
+                                       "fine-tuned"),
+            std::string::npos)
+      << hybrid_fine_tuned.out;
+
   // The offline trainer on the same recipe, registering into the same data directory.
   const CliRun offline_run = RegisterWithGonogoAnn(data, " --walk-share 0.6");
   ASSERT_EQ(offline_run.exit_code, 0) << offline_run.out;
@@ -212,6 +231,14 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + trained);
   ASSERT_EQ(curve.exit_code, 0) << curve.out;
   EXPECT_NE(curve.out.find("surrogate model " + trained), std::string::npos) << curve.out;
+  // So does the hybrid, its second network loaded from the registry beside the first.
+  const CliRun hybrid_curve = Gonogo(
+      server.endpoint(),
+      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
+      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + hybrid_model);
+  ASSERT_EQ(hybrid_curve.exit_code, 0) << hybrid_curve.out;
+  EXPECT_NE(hybrid_curve.out.find("surrogate model " + hybrid_model), std::string::npos)
+      << hybrid_curve.out;
 
   // Seed 000's step 2: the paths of a rig run's points join the data, the run on one worker.
   const CliRun with_rig = Gonogo(server.endpoint(), std::string("train ") + kRecipe +
@@ -340,6 +367,10 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       {"train --soil seed000_sand_rve100 --from " + trained + " --pressure-scaled 500",
        "pressure_reference_pa: a fine-tuned model keeps its base model's pressure scaling"},
       {"train --soil seed000_sand_rve100 --walk-share 1", "walk_share: must lie in [0, 0.99]"},
+      {"train --soil seed000_sand_rve100 --hybrid --unanchored",
+       "hybrid: needs the anchored network (not unanchored)"},
+      {"train --soil seed000_sand_rve100 --from " + trained + " --hybrid",
+       "hybrid: a fine-tuned model keeps its base model's form"},
   };
   for (const auto& [args, message] : refusals) {
     const CliRun refused = Gonogo(server.endpoint(), args);
