@@ -199,6 +199,24 @@ torch::Tensor DirectionFeatures(const torch::Tensor& raw, double reference_pa, d
       1);
 }
 
+// tanh layers of `hidden_widths` from `inputs` columns and a linear layer to `outputs`, in
+// double precision; the linear layers in `layers`, in order.
+torch::nn::Sequential TanhNetwork(int inputs, const std::vector<int>& hidden_widths, int outputs,
+                                  std::vector<torch::nn::Linear>* layers) {
+  torch::nn::Sequential network;
+  int width = inputs;
+  for (int hidden : hidden_widths) {
+    layers->push_back(torch::nn::Linear(width, hidden));
+    network->push_back(layers->back());
+    network->push_back(torch::nn::Tanh());
+    width = hidden;
+  }
+  layers->push_back(torch::nn::Linear(width, outputs));
+  network->push_back(layers->back());
+  network->to(torch::kFloat64);
+  return network;
+}
+
 // The homogeneous term's second network, for ScriptModule (empty weights: none).
 struct DirectionNetwork {
   std::vector<torch::Tensor> weights, biases;
@@ -659,32 +677,17 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
 
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
-  torch::nn::Sequential net;
-  int width = kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
+  const int network_inputs =
+      kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
   std::vector<torch::nn::Linear> layers;
-  for (int hidden : architecture.hidden_widths) {
-    layers.push_back(torch::nn::Linear(width, hidden));
-    net->push_back(layers.back());
-    net->push_back(torch::nn::Tanh());
-    width = hidden;
-  }
-  layers.push_back(torch::nn::Linear(width, outputs));
-  net->push_back(layers.back());
-  net->to(torch::kFloat64);
+  torch::nn::Sequential net =
+      TanhNetwork(network_inputs, architecture.hidden_widths, outputs, &layers);
   torch::nn::Sequential direction_net;  // MlpArchitecture::homogeneous_term's M, N's widths
   std::vector<torch::nn::Linear> direction_layers;
   std::vector<torch::Tensor> parameters = net->parameters();
   if (hybrid) {
-    int direction_width = kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
-    for (int hidden : architecture.hidden_widths) {
-      direction_layers.push_back(torch::nn::Linear(direction_width, hidden));
-      direction_net->push_back(direction_layers.back());
-      direction_net->push_back(torch::nn::Tanh());
-      direction_width = hidden;
-    }
-    direction_layers.push_back(torch::nn::Linear(direction_width, outputs));
-    direction_net->push_back(direction_layers.back());
-    direction_net->to(torch::kFloat64);
+    direction_net =
+        TanhNetwork(network_inputs, architecture.hidden_widths, outputs, &direction_layers);
     for (const torch::Tensor& parameter : direction_net->parameters()) {
       parameters.push_back(parameter);
     }

@@ -26,6 +26,16 @@ namespace {
 
 const char* const kRecipe = kSmallSurrogateRecipe;
 
+// `gonogo curve --tier fe-ann` on the tiny rig (the 0.5 x 0.2 m wheel at 1,000 N, slips 0, 0.5
+// and 1) with the registered `model`.
+CliRun FeAnnCurve(const std::string& endpoint, const std::string& model) {
+  return Gonogo(
+      endpoint,
+      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 "
+      "--wheel-width 0.2 --section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " +
+          model);
+}
+
 // The text after `label` on the line of `out` that holds `label`, after `from`.
 std::string LineAfter(const std::string& out, const std::string& label, size_t from = 0) {
   const size_t at = out.find(label, from);
@@ -225,17 +235,11 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   EXPECT_EQ(CountLines(ReadFile(exported / (dataset + "-held-out.npy.columns.txt"))), 17u);
 
   // The pool's model computes an fe-ann curve.
-  const CliRun curve = Gonogo(
-      server.endpoint(),
-      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
-      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + trained);
+  const CliRun curve = FeAnnCurve(server.endpoint(), trained);
   ASSERT_EQ(curve.exit_code, 0) << curve.out;
   EXPECT_NE(curve.out.find("surrogate model " + trained), std::string::npos) << curve.out;
   // So does the hybrid, its second network loaded from the registry beside the first.
-  const CliRun hybrid_curve = Gonogo(
-      server.endpoint(),
-      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
-      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + hybrid_model);
+  const CliRun hybrid_curve = FeAnnCurve(server.endpoint(), hybrid_model);
   ASSERT_EQ(hybrid_curve.exit_code, 0) << hybrid_curve.out;
   EXPECT_NE(hybrid_curve.out.find("surrogate model " + hybrid_model), std::string::npos)
       << hybrid_curve.out;
@@ -404,10 +408,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
       ReadFile(dir.path() / "export3" / (dataset + "+coordination_number.csv"));
   EXPECT_NE(carried_table.find(",sigma_xy_pa,coordination_number\n"), std::string::npos)
       << carried_table.substr(0, 300);
-  const CliRun carrying_curve = Gonogo(
-      server.endpoint(),
-      "curve --tier fe-ann --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2 "
-      "--section-height 0.1 --wheel-load 1000 --slip-step 0.5 --model " + carrying_id);
+  const CliRun carrying_curve = FeAnnCurve(server.endpoint(), carrying_id);
   ASSERT_EQ(carrying_curve.exit_code, 0) << carrying_curve.out;
   EXPECT_NE(carrying_curve.out.find("surrogate model " + carrying_id), std::string::npos)
       << carrying_curve.out;

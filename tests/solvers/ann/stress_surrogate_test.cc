@@ -344,6 +344,29 @@ double LargestPythonDifference(const std::filesystem::path& directory,
   return largest_difference;
 }
 
+// `surrogate` saved as TorchScript and loaded again, in C++ and in Python's torch: its
+// architecture and the same answers to the raw `inputs`.
+void ExpectSavedAndLoadedAlikeInCppAndPython(const StressSurrogate& surrogate,
+                                             const std::vector<SurrogateInput>& inputs,
+                                             const std::string& directory_name) {
+  const std::filesystem::path directory =
+      std::filesystem::temp_directory_path() / (directory_name + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(directory);
+  const std::string model_path = (directory / "model.pt").string();
+  surrogate.Save(model_path);
+  const StressSurrogate loaded = StressSurrogate::Load(model_path);
+  EXPECT_EQ(loaded.architecture(), surrogate.architecture());
+  const std::vector<Vector6> answers = surrogate.StressIncrements(inputs);
+  const std::vector<Vector6> loaded_answers = loaded.StressIncrements(inputs);
+  for (std::size_t n = 0; n < inputs.size(); ++n) EXPECT_EQ(answers[n], loaded_answers[n]) << n;
+  std::string python_architecture;
+  EXPECT_LT(LargestPythonDifference(directory, model_path, inputs, answers, &python_architecture),
+            1e-9)
+      << "Pa, Python against C++";
+  EXPECT_EQ(python_architecture, surrogate.architecture());
+  std::filesystem::remove_all(directory);
+}
+
 TEST(StressSurrogate, SavesAsTorchScriptAndLoadsToTheSameAnswers) {
   const StressSurrogate& surrogate = Trained();
   const std::filesystem::path directory =
@@ -622,22 +645,7 @@ TEST(StressSurrogate, APressureScaledNetworkTakesAndAnswersRawValues) {
   EXPECT_LT(tangent_error, 1e-5 * largest_entry);
 
   // Saved and loaded, in C++ and in Python's torch: the same answers to the raw inputs.
-  const std::filesystem::path directory =
-      std::filesystem::temp_directory_path() / ("gonogo_scaled_" + std::to_string(getpid()));
-  std::filesystem::create_directories(directory);
-  const std::string model_path = (directory / "model.pt").string();
-  scaled.Save(model_path);
-  const StressSurrogate loaded = StressSurrogate::Load(model_path);
-  EXPECT_EQ(loaded.architecture(), scaled.architecture());
-  const std::vector<Vector6> answers = scaled.StressIncrements(inputs);
-  const std::vector<Vector6> loaded_answers = loaded.StressIncrements(inputs);
-  for (std::size_t n = 0; n < inputs.size(); ++n) EXPECT_EQ(answers[n], loaded_answers[n]) << n;
-  std::string python_architecture;
-  EXPECT_LT(LargestPythonDifference(directory, model_path, inputs, answers, &python_architecture),
-            1e-9)
-      << "Pa, Python against C++";
-  EXPECT_EQ(python_architecture, scaled.architecture());
-  std::filesystem::remove_all(directory);
+  ExpectSavedAndLoadedAlikeInCppAndPython(scaled, inputs, "gonogo_scaled");
 
   TrainingOptions tuning = options;
   tuning.epochs = 5;
@@ -737,22 +745,8 @@ TEST(StressSurrogate, AHybridAnswersATinyStepAndItsReverseUnlikeEachOther) {
   EXPECT_LT(smooth_sum / steps, 0.01);
   EXPECT_GT(hybrid_sum / steps, 0.3);
 
-  // Python's torch: the same answers to the raw inputs.
-  const std::filesystem::path directory =
-      std::filesystem::temp_directory_path() / ("gonogo_hybrid_" + std::to_string(getpid()));
-  std::filesystem::create_directories(directory);
-  const std::string model_path = (directory / "model.pt").string();
-  hybrid.Save(model_path);
-  const StressSurrogate loaded = StressSurrogate::Load(model_path);
-  EXPECT_EQ(loaded.architecture(), hybrid.architecture());
-  const std::vector<Vector6> answers = hybrid.StressIncrements(inputs);
-  const std::vector<Vector6> loaded_answers = loaded.StressIncrements(inputs);
-  for (std::size_t n = 0; n < inputs.size(); ++n) EXPECT_EQ(answers[n], loaded_answers[n]) << n;
-  std::string python_architecture;
-  EXPECT_LT(LargestPythonDifference(directory, model_path, inputs, answers, &python_architecture),
-            1e-9)
-      << "Pa, Python against C++";
-  std::filesystem::remove_all(directory);
+  // Saved and loaded, in C++ and in Python's torch: the same answers to the raw inputs.
+  ExpectSavedAndLoadedAlikeInCppAndPython(hybrid, inputs, "gonogo_hybrid");
 
   MlpArchitecture unanchored = hybrid_architecture;
   unanchored.anchored = false;
