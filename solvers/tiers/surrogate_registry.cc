@@ -35,10 +35,11 @@ std::string Replaced(std::string text, const std::string& from, const std::strin
 
 // The short form of an architecture's name (MlpArchitecture::Describe), for an id that would
 // otherwise be cut: "mlp-128x128-tanh-anchored-pressure-scaled-3000pa-carrying-coordination_number"
-// is "mlp-128x128-anchored-ps3000pa-cn". Every network is tanh; the carried variables by their
-// initials (fabric_xy: fxy).
+// is "mlp-128x128-anchored-ps3000pa-cn". Every network is tanh; the hybrid is "-hy"; the carried
+// variables by their initials (fabric_xy: fxy).
 std::string ShortArchitecture(std::string architecture) {
   for (const auto& [from, to] : {std::pair<const char*, const char*>{"-tanh", ""},
+                                 {"-hybrid", "-hy"},
                                  {"-pressure-scaled-", "-ps"},
                                  {"-carrying-", "-"},
                                  {"coordination_number", "cn"},

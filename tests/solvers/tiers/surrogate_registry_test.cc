@@ -131,6 +131,10 @@ TEST_F(SurrogateRegistryTest, RegistersFindsChoosesTheBestAndLists) {
                            "coordination_number+solid_fraction"),
             "seed000_sand_rve100-mlp-128x128-anchored-ps3000pa-cn-sf-1");
   EXPECT_EQ(registry.NewId("seed000_sand_rve100",
+                           "mlp-128x128-tanh-anchored-hybrid-pressure-scaled-3000pa-carrying-"
+                           "coordination_number"),
+            "seed000_sand_rve100-mlp-128x128-anchored-hy-ps3000pa-cn-1");
+  EXPECT_EQ(registry.NewId("seed000_sand_rve100",
                            "mlp-64x64x64x64x64x64-tanh-anchored-carrying-"
                            "fabric_xx+fabric_yy+fabric_zz+fabric_xy"),
             "seed000_sand_rve100-mlp-64x64x64x64x64x64-anchored-fxx-1");
