@@ -16,6 +16,10 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
                step's size (a granular soil's stiffness falls as its strain amplitude grows).
   hybrid       the smooth form plus a homogeneous term of a second network of the same size:
                d_sigma = s (N(d_eps, ...) - N(0, ...) + |d_eps| M(d_eps / |d_eps|, ...)).
+  unloading    the hybrid with its term gated to unloading: times u = max(0, -n : sigma / |sigma|),
+               n = d_eps / |d_eps| (the work the step does on the stress, over its greatest:
+               positive where the step loads, negative where it unloads, the shears' included), so
+               that the smooth network alone answers a loading step.
   shared       the same two terms from one network of twice the outputs, which sees the
                increment and its direction: d_sigma = s (A(x) - A(x_0) + |d_eps| B(x)), [A, B] =
                N(d_eps, d_eps / |d_eps|, ...), x_0 the same with no increment; as costly as the
@@ -29,8 +33,12 @@ DIR: the --out of `gonogo-ann --rig-load-n W --rig-points N --carry coordination
 training.npy holds the recipe's 16 laboratory paths, then the walks, then the rig's paths, and
 held_out.npy the recipe's held-out paths, then the rig's.
 
-    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog}
+    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,unloading,shared}
         [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--stiffness-only]
+
+After the errors, each held-out rig path's steps answered one at a time from the RVE's own states
+(step_stiffness.py's figures: the members' |d_sigma| over the RVE's, loading and unloading steps
+apart).
 
 (--stiffness-only: each path kind's median step size and median stiffness |d_sigma| / (s |d_eps|),
 the ranges over its paths, and nothing trained.)
@@ -44,6 +52,7 @@ import numpy as np
 import torch
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from step_stiffness import step_inputs  # noqa: E402
 from trajectory_spread import RIG_ROWS, Admissible, histories, kinematics, tensors, voigts  # noqa: E402
 
 PRESSURE_REFERENCE_PA = 3000.0
@@ -55,6 +64,18 @@ def strain_norm(d):
     """|d_eps| of (n, 6) Voigt strain rows with engineering shears, as (n, 1)."""
     return torch.sqrt((d[:, :3] ** 2).sum(1, keepdim=True) +
                       0.5 * (d[:, 3:] ** 2).sum(1, keepdim=True))
+
+
+def unloading_gate(x):
+    """max(0, -n : sigma / |sigma|) of raw input rows, (n, 1): n the increment's direction
+    (engineering shears, so that n : sigma is the step's work on the stress), 1 where the step
+    runs straight against the stress, 0 where it loads."""
+    d, sigma = x[:, :6], x[:, 6:12]
+    n = d / torch.clamp(strain_norm(d), min=1e-300)
+    sigma_norm = torch.sqrt((sigma[:, :3] ** 2).sum(1, keepdim=True) +
+                            2 * (sigma[:, 3:] ** 2).sum(1, keepdim=True))
+    return torch.clamp(-(n * sigma).sum(1, keepdim=True) / torch.clamp(sigma_norm, min=1e-300),
+                       min=0)
 
 
 def pressure_scale(x):
@@ -96,7 +117,8 @@ def print_stiffness(training, is_walk, held_out, z_column):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
-    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'shared'])
+    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'unloading',
+                                         'shared'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -134,7 +156,7 @@ def main():
             return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
-        if form not in ('smooth', 'hybrid'):
+        if form not in ('smooth', 'hybrid', 'unloading'):
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
@@ -162,7 +184,7 @@ def main():
                 torch.nn.Linear(F.shape[1], 128), torch.nn.Tanh(), torch.nn.Linear(128, 128),
                 torch.nn.Tanh(), torch.nn.Linear(128, outputs))
 
-            if form == 'hybrid':
+            if form in ('hybrid', 'unloading'):
                 self.direction_net = torch.nn.Sequential(
                     torch.nn.Linear(F_direction.shape[1], 128), torch.nn.Tanh(),
                     torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
@@ -177,14 +199,16 @@ def main():
                 at_rest = self.net((rest - in_mean) / in_scale)
                 return ((at[:, :n] - at_rest[:, :n]) * out_scale +
                         strain_norm(x[:, :6]) / step_reference * at[:, n:] * out_scale)
-            if form == 'hybrid':
+            if form in ('hybrid', 'unloading'):
                 rest = f.clone()
                 rest[:, :6] = 0
                 direction = (features(x, 'homogeneous') - direction_mean) / direction_scale_in
+                gain = strain_norm(x[:, :6]) / step_reference
+                if form == 'unloading':
+                    gain = gain * unloading_gate(x)
                 return ((self.net((f - in_mean) / in_scale) -
                          self.net((rest - in_mean) / in_scale)) * out_scale +
-                        strain_norm(x[:, :6]) / step_reference * self.direction_net(direction) *
-                        out_scale)
+                        gain * self.direction_net(direction) * out_scale)
             if form != 'smooth':
                 return (strain_norm(x[:, :6]) / step_reference *
                         self.net((f - in_mean) / in_scale) * direction_scale)
@@ -253,6 +277,19 @@ def main():
     weighting = (f', step sizes weighed up to x{args.step_size_weighting:g}'
                  if args.step_size_weighting > 0 else '')
     print(f'{form}, {args.epochs} epochs, seed {args.seed}{weighting}: ' + ', '.join(figures))
+    # step_stiffness.py's figures on the held-out rig paths: each step answered from the RVE's own
+    # state, the members' |d_sigma| summed over the RVE's, loading and unloading steps apart.
+    for name, rows in zip(names, held_out):
+        if len(rows) != RIG_ROWS:
+            continue
+        inputs, rve, loading = step_inputs(rows, [z_column])
+        with torch.no_grad():
+            answer = np.mean([m.answer(torch.from_numpy(inputs)).numpy()[:, :6]
+                              for m in members], 0)
+        sums = [np.linalg.norm(answer[kind], axis=1).sum() / np.linalg.norm(rve[kind], axis=1).sum()
+                for kind in (loading, ~loading)]
+        print(f'  {name}, one step at a time: loading {sums[0]:.2f}, unloading {sums[1]:.2f} of '
+              "the RVE's |d_sigma|")
 
 
 if __name__ == '__main__':
