@@ -20,6 +20,9 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
                n = d_eps / |d_eps| (the work the step does on the stress, over its greatest:
                positive where the step loads, negative where it unloads, the shears' included), so
                that the smooth network alone answers a loading step.
+  residual     the unloading form trained in two stages: the smooth network alone (as `smooth`),
+               then, that network frozen, the gated term on what it leaves, so that a loading
+               step is answered as by its smooth network alone.
   shared       the same two terms from one network of twice the outputs, which sees the
                increment and its direction: d_sigma = s (A(x) - A(x_0) + |d_eps| B(x)), [A, B] =
                N(d_eps, d_eps / |d_eps|, ...), x_0 the same with no increment; as costly as the
@@ -33,7 +36,7 @@ DIR: the --out of `gonogo-ann --rig-load-n W --rig-points N --carry coordination
 training.npy holds the recipe's 16 laboratory paths, then the walks, then the rig's paths, and
 held_out.npy the recipe's held-out paths, then the rig's.
 
-    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,unloading,shared}
+    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,unloading,residual,shared}
         [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--stiffness-only]
 
 After the errors, each held-out rig path's steps answered one at a time from the RVE's own states
@@ -118,7 +121,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
     parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'unloading',
-                                         'shared'])
+                                         'residual', 'shared'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -156,7 +159,7 @@ def main():
             return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
-        if form not in ('smooth', 'hybrid', 'unloading'):
+        if form not in ('smooth', 'hybrid', 'unloading', 'residual'):
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
@@ -184,7 +187,8 @@ def main():
                 torch.nn.Linear(F.shape[1], 128), torch.nn.Tanh(), torch.nn.Linear(128, 128),
                 torch.nn.Tanh(), torch.nn.Linear(128, outputs))
 
-            if form in ('hybrid', 'unloading'):
+            self.term_on = True
+            if form in ('hybrid', 'unloading', 'residual'):
                 self.direction_net = torch.nn.Sequential(
                     torch.nn.Linear(F_direction.shape[1], 128), torch.nn.Tanh(),
                     torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
@@ -199,13 +203,15 @@ def main():
                 at_rest = self.net((rest - in_mean) / in_scale)
                 return ((at[:, :n] - at_rest[:, :n]) * out_scale +
                         strain_norm(x[:, :6]) / step_reference * at[:, n:] * out_scale)
-            if form in ('hybrid', 'unloading'):
+            if form in ('hybrid', 'unloading', 'residual'):
                 rest = f.clone()
                 rest[:, :6] = 0
                 direction = (features(x, 'homogeneous') - direction_mean) / direction_scale_in
                 gain = strain_norm(x[:, :6]) / step_reference
-                if form == 'unloading':
+                if form in ('unloading', 'residual'):
                     gain = gain * unloading_gate(x)
+                if not self.term_on:
+                    gain = gain * 0
                 return ((self.net((f - in_mean) / in_scale) -
                          self.net((rest - in_mean) / in_scale)) * out_scale +
                         gain * self.direction_net(direction) * out_scale)
@@ -224,7 +230,20 @@ def main():
     def train(seed):
         torch.manual_seed(seed)
         member = Member()
-        optimiser = torch.optim.Adam(member.parameters(), lr=1e-3)
+        if form == 'residual':  # the smooth network alone, then the gated term on its residual
+            member.term_on = False
+            fit(member, member.net.parameters())
+            member.term_on = True
+            for parameter in member.net.parameters():
+                parameter.requires_grad_(False)
+            fit(member, member.direction_net.parameters())
+        else:
+            fit(member, member.parameters())
+        with torch.no_grad():
+            return member, float((W[:, None] * ((member(F, X) - T) / out_scale) ** 2).mean())
+
+    def fit(member, parameters):
+        optimiser = torch.optim.Adam(parameters, lr=1e-3)
         for epoch in range(args.epochs):
             if epoch in (args.epochs // 2, args.epochs * 3 // 4, args.epochs * 9 // 10):
                 for group in optimiser.param_groups:
@@ -239,8 +258,6 @@ def main():
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
-        with torch.no_grad():
-            return member, float((W[:, None] * ((member(F, X) - T) / out_scale) ** 2).mean())
 
     start = time.time()
     members = []
