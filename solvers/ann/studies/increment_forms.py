@@ -37,7 +37,8 @@ training.npy holds the recipe's 16 laboratory paths, then the walks, then the ri
 held_out.npy the recipe's held-out paths, then the rig's.
 
     python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,unloading,residual,shared}
-        [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--stiffness-only]
+        [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--rig-weight R]
+        [--stiffness-only]
 
 After the errors, each held-out rig path's steps answered one at a time from the RVE's own states
 (step_stiffness.py's figures: the members' |d_sigma| over the RVE's, loading and unloading steps
@@ -126,6 +127,8 @@ def main():
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
     parser.add_argument('--step-size-weighting', type=float, default=0, metavar='CAP')
+    parser.add_argument('--rig-weight', type=float, default=1, metavar='R',
+                        help="each training rig path's steps weigh R times a laboratory step")
     parser.add_argument('--stiffness-only', action='store_true',
                         help="print the paths' step sizes and stiffnesses only, no training")
     args = parser.parse_args()
@@ -149,7 +152,8 @@ def main():
         x, y = steps_of(rows, z_column)
         xs.append(x)
         ys.append(y)
-        ws.append(np.full(len(x), walk_weight if walk else 1.0))
+        rig = len(rows) == RIG_ROWS
+        ws.append(np.full(len(x), walk_weight if walk else args.rig_weight if rig else 1.0))
     X, Y, W = (torch.from_numpy(np.concatenate(a)) for a in (xs, ys, ws))
     W = W / W.mean()
     step_reference = float(strain_norm(X[:, :6]).median())
@@ -293,6 +297,8 @@ def main():
         figures.append(f'{name} {100 * error:.2f} %')
     weighting = (f', step sizes weighed up to x{args.step_size_weighting:g}'
                  if args.step_size_weighting > 0 else '')
+    if args.rig_weight != 1:
+        weighting += f', rig steps weighed x{args.rig_weight:g}'
     print(f'{form}, {args.epochs} epochs, seed {args.seed}{weighting}: ' + ', '.join(figures))
     # step_stiffness.py's figures on the held-out rig paths: each step answered from the RVE's own
     # state, the members' |d_sigma| summed over the RVE's, loading and unloading steps apart.
