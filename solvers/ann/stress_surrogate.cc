@@ -217,6 +217,29 @@ torch::nn::Sequential TanhNetwork(int inputs, const std::vector<int>& hidden_wid
   return network;
 }
 
+// Registers a tanh network's layers in `module` as <weight_prefix>k, <bias_prefix>k and writes
+// its TorchScript method `name`: standardised by the buffers <standardisation>mean and
+// <standardisation>scale, the tanh layers, the linear output.
+void AddNetworkMethod(torch::jit::Module& module, std::ostringstream& source,
+                      const std::string& name, const std::string& standardisation,
+                      const std::string& weight_prefix, const std::string& bias_prefix,
+                      const std::vector<torch::Tensor>& weights,
+                      const std::vector<torch::Tensor>& biases) {
+  source << "def " << name << "(self, x):\n"
+         << "    h = (x - self." << standardisation << "mean) / self." << standardisation
+         << "scale\n";
+  for (std::size_t layer = 0; layer < weights.size(); ++layer) {
+    const std::string w = weight_prefix + std::to_string(layer);
+    const std::string b = bias_prefix + std::to_string(layer);
+    module.register_parameter(w, weights[layer].detach().clone(), false);
+    module.register_parameter(b, biases[layer].detach().clone(), false);
+    const bool last = layer + 1 == weights.size();
+    source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
+           << ".t()) + self." << b << (last ? "" : ")") << "\n";
+  }
+  source << "    return h\n";
+}
+
 // The homogeneous term's second network, for ScriptModule (empty weights: none).
 struct DirectionNetwork {
   std::vector<torch::Tensor> weights, biases;
@@ -243,34 +266,15 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
   module.register_buffer("out_scale", out_scale.detach().clone());
   module.register_attribute("architecture", c10::StringType::get(), architecture);
   std::ostringstream source;
-  source << "def network(self, x):\n"
-         << "    h = (x - self.in_mean) / self.in_scale\n";
-  for (std::size_t layer = 0; layer < weights.size(); ++layer) {
-    const std::string w = "w" + std::to_string(layer), b = "b" + std::to_string(layer);
-    module.register_parameter(w, weights[layer].detach().clone(), false);
-    module.register_parameter(b, biases[layer].detach().clone(), false);
-    const bool last = layer + 1 == weights.size();
-    source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
-           << ".t()) + self." << b << (last ? "" : ")") << "\n";
-  }
-  source << "    return h\n";
+  AddNetworkMethod(module, source, "network", "in_", "w", "b", weights, biases);
   const bool hybrid = !direction.weights.empty();
   if (hybrid) {
     module.register_buffer("direction_in_mean", direction.in_mean.detach().clone());
     module.register_buffer("direction_in_scale", direction.in_scale.detach().clone());
     module.register_attribute("step_reference", c10::FloatType::get(), direction.step_reference);
     module.register_attribute("step_delta", c10::FloatType::get(), kStepDelta);
-    source << "def direction_network(self, x):\n"
-           << "    h = (x - self.direction_in_mean) / self.direction_in_scale\n";
-    for (std::size_t layer = 0; layer < direction.weights.size(); ++layer) {
-      const std::string w = "v" + std::to_string(layer), b = "c" + std::to_string(layer);
-      module.register_parameter(w, direction.weights[layer].detach().clone(), false);
-      module.register_parameter(b, direction.biases[layer].detach().clone(), false);
-      const bool last = layer + 1 == direction.weights.size();
-      source << "    h = " << (last ? "" : "torch.tanh(") << "torch.matmul(h, self." << w
-             << ".t()) + self." << b << (last ? "" : ")") << "\n";
-    }
-    source << "    return h\n";
+    AddNetworkMethod(module, source, "direction_network", "direction_in_", "v", "c",
+                     direction.weights, direction.biases);
   }
   const bool scaled = reference_pa > 0;
   if (scaled) {
@@ -323,20 +327,30 @@ Eigen::VectorXd VectorOf(const torch::Tensor& tensor) {
 }
 
 // The module's weights as the fused kernel's; throws c10::Error for a module without them.
+// The module's layers <weight_prefix>0, <bias_prefix>0, ... as Eigen matrices and vectors.
+void FusedLayers(const torch::jit::Module& module, const std::string& weight_prefix,
+                 const std::string& bias_prefix, std::vector<Eigen::MatrixXd>* weights,
+                 std::vector<Eigen::VectorXd>* biases) {
+  for (int layer = 0; module.hasattr(weight_prefix + std::to_string(layer)); ++layer) {
+    const torch::Tensor w = module.attr(weight_prefix + std::to_string(layer))
+                                .toTensor()
+                                .detach()
+                                .to(torch::kFloat64)
+                                .contiguous();
+    // Row-major (out, in) into a column-major matrix of the same shape.
+    Eigen::MatrixXd matrix(w.size(0), w.size(1));
+    const double* data = w.data_ptr<double>();
+    for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
+      for (Eigen::Index c = 0; c < matrix.cols(); ++c) matrix(r, c) = data[r * matrix.cols() + c];
+    }
+    weights->push_back(std::move(matrix));
+    biases->push_back(VectorOf(module.attr(bias_prefix + std::to_string(layer)).toTensor()));
+  }
+}
+
 FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architecture) {
   FusedMlp fused;
-  for (int layer = 0; module.hasattr("w" + std::to_string(layer)); ++layer) {
-    const torch::Tensor w = module.attr("w" + std::to_string(layer)).toTensor().detach()
-                                .to(torch::kFloat64).contiguous();
-    // Row-major (out, in) into a column-major matrix of the same shape.
-    Eigen::MatrixXd weights(w.size(0), w.size(1));
-    const double* data = w.data_ptr<double>();
-    for (Eigen::Index r = 0; r < weights.rows(); ++r) {
-      for (Eigen::Index c = 0; c < weights.cols(); ++c) weights(r, c) = data[r * weights.cols() + c];
-    }
-    fused.weights.push_back(std::move(weights));
-    fused.biases.push_back(VectorOf(module.attr("b" + std::to_string(layer)).toTensor()));
-  }
+  FusedLayers(module, "w", "b", &fused.weights, &fused.biases);
   fused.in_mean = VectorOf(module.attr("in_mean").toTensor());
   fused.in_scale = VectorOf(module.attr("in_scale").toTensor());
   fused.out_mean = VectorOf(module.attr("out_mean").toTensor());
@@ -344,21 +358,7 @@ FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architectu
   fused.anchored = architecture.find("-anchored") != std::string::npos;
   fused.pressure_reference_pa =
       module.hasattr("pressure_reference_pa") ? module.attr("pressure_reference_pa").toDouble() : 0;
-  for (int layer = 0; module.hasattr("v" + std::to_string(layer)); ++layer) {
-    const torch::Tensor w = module.attr("v" + std::to_string(layer))
-                                .toTensor()
-                                .detach()
-                                .to(torch::kFloat64)
-                                .contiguous();
-    Eigen::MatrixXd weights(w.size(0), w.size(1));
-    const double* data = w.data_ptr<double>();
-    for (Eigen::Index r = 0; r < weights.rows(); ++r) {
-      for (Eigen::Index c = 0; c < weights.cols(); ++c)
-        weights(r, c) = data[r * weights.cols() + c];
-    }
-    fused.direction_weights.push_back(std::move(weights));
-    fused.direction_biases.push_back(VectorOf(module.attr("c" + std::to_string(layer)).toTensor()));
-  }
+  FusedLayers(module, "v", "c", &fused.direction_weights, &fused.direction_biases);
   if (!fused.direction_weights.empty()) {
     fused.direction_in_mean = VectorOf(module.attr("direction_in_mean").toTensor());
     fused.direction_in_scale = VectorOf(module.attr("direction_in_scale").toTensor());
