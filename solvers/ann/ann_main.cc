@@ -539,6 +539,9 @@ int Run(const StudyCommandLine& line) {
   } catch (const InputError& e) {  // named by the flag that gave it
     throw InputError("--carry", std::string(e.what()).substr(e.field().size() + 2));
   }
+  if (line.rig_weight != 1 && line.rig_load_n <= 0) {
+    throw InputError("--rig-weight", "weighs the rig's recorded paths: give --rig-load-n too");
+  }
   tiers::RveVariables(line.carried, "--carry");  // refused before any path runs
   std::optional<SurrogateEnsemble> from;         // loaded before any path runs
   if (!line.from_model_dir.empty()) from = SurrogateEnsemble::Load(line.from_model_dir);
@@ -573,6 +576,16 @@ int Run(const StudyCommandLine& line) {
     }
     std::printf("# the walks' %.0f steps weigh %.3g each, the other %.0f steps 1\n", walk_steps,
                 walk_weight, other_steps);
+  }
+  if (line.rig_weight != 1) {
+    // The rig's recorded paths follow the recipe's in `training` (AddRigPaths).
+    history_weights.resize(study.training.size(), 1.0);
+    double rig_steps = 0;
+    for (std::size_t k = study.training_paths.size(); k < study.training.size(); ++k) {
+      history_weights[k] *= line.rig_weight;
+      rig_steps += static_cast<double>(study.training[k].steps());
+    }
+    std::printf("# the rig's %.0f training steps weigh %.3g each\n", rig_steps, line.rig_weight);
   }
   std::printf("architecture,members,epochs,samples,train_s,mean_final_loss,");
   for (const std::string& name : study.held_out_names) std::printf("%s %%,", name.c_str());

@@ -151,6 +151,11 @@ void AddStudyOptions(CLI::App& app, StudyCommandLine& line) {
                  "0: their share of the steps")
       ->check(CLI::Range(0.0, 0.99))
       ->capture_default_str();
+  app.add_option("--rig-weight", line.rig_weight,
+                 "each step of the rig's recorded training paths weighs this many laboratory "
+                 "steps in the loss (--rig-load-n; after --walk-share, which counts them as 1)")
+      ->check(CLI::Range(0.01, 100.0))
+      ->capture_default_str();
   app.add_option("--walk-persistence", line.walk_persistence,
                  "the training walks' correlation of one step's direction with the last's (0: "
                  "drawn afresh; 0.9: loading on for about 10 steps); held-out walks stay at 0")

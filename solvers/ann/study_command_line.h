@@ -47,6 +47,7 @@ struct StudyCommandLine {
   double stress_noise = 0;  // TrainingOptions::stress_noise
   double noise_correction = 1;
   double walk_share = 0;        // > 0: the random walks' share of the loss
+  double rig_weight = 1;        // the rig's recorded paths' steps, each weighed as this many
   double walk_persistence = 0;  // the training walks' (ann::LabPathSpec::walk_persistence)
   std::uint64_t training_seed = 1;
   bool record_fabric = false;  // histories record the RVE's coordination and fabric (--out)

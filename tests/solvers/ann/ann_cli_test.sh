@@ -1,15 +1,15 @@
 #!/bin/sh
-# gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of
-# the architecture, and refuses malformed architectures by name before running any path; then
-# fine-tunes that ensemble (--from) beside a new one from scratch and registers both (--register)
-# with their provenance, the fine-tuned one naming its base. The first run records the RVE's
-# fabric (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts.
-# A network carrying the coordination number (--carry) is trained; what cannot be carried is
-# refused by name. The RVE's own spread (--packing-seeds): the study's packing (seed 1) against
-# itself is 0 on every held-out path, another packing is not. The studies of the RVE alone: at
-# rest (--rest-kpa) its stress is printed every tenth zero increment, and the increment-size study
-# (--increment-kpa) prints p and q along each step count; an unknown --increment-path is refused
-# by name.
+# gonogo-ann at a tiny size: it writes the histories and the ensemble, prints the figure row of the
+# architecture, and refuses malformed architectures by name before running any path; then fine-tunes
+# that ensemble (--from) beside a new one from scratch and registers both (--register) with their
+# provenance, the fine-tuned one naming its base. The first run records the RVE's fabric
+# (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts. A
+# network carrying the coordination number (--carry) is trained; what cannot be carried is refused
+# by name, as is --rig-weight without the rig's paths. The RVE's own spread (--packing-seeds): the
+# study's packing (seed 1) against itself is 0 on every held-out path, another packing is not. The
+# studies of the RVE alone: at rest (--rest-kpa) its stress is printed every tenth zero increment,
+# and the increment-size study (--increment-kpa) prints p and q along each step count; an unknown
+# --increment-path is refused by name.
 set -eu
 ann="$1"
 out="$2"
@@ -69,6 +69,11 @@ for bad in void_ratio fabric_xz; do
   fi
   grep -q -- "--carry.*'$bad'" "$out/error.txt"
 done
+if "$ann" --rig-weight 4 > /dev/null 2> "$out/error.txt"; then
+  echo "--rig-weight without the rig's paths was accepted" >&2
+  exit 1
+fi
+grep -q -- "--rig-weight: weighs the rig's recorded paths: give --rig-load-n too" "$out/error.txt"
 if "$ann" --carry coordination_number --architecture gru8 > /dev/null 2> "$out/error.txt"; then
   echo "--carry with a GRU was accepted" >&2
   exit 1
