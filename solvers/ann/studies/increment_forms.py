@@ -16,6 +16,8 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
                step's size (a granular soil's stiffness falls as its strain amplitude grows).
   hybrid       the smooth form plus a homogeneous term of a second network of the same size:
                d_sigma = s (N(d_eps, ...) - N(0, ...) + |d_eps| M(d_eps / |d_eps|, ...)).
+  hyblog       the hybrid with log |d_eps| a further input of its second network, so that its term
+               may differ between a rig's steps and a walk's.
   unloading    the hybrid with its term gated to unloading: times u = max(0, -n : sigma / |sigma|),
                n = d_eps / |d_eps| (the work the step does on the stress, over its greatest:
                positive where the step loads, negative where it unloads, the shears' included), so
@@ -36,7 +38,7 @@ DIR: the --out of `gonogo-ann --rig-load-n W --rig-points N --carry coordination
 training.npy holds the recipe's 16 laboratory paths, then the walks, then the rig's paths, and
 held_out.npy the recipe's held-out paths, then the rig's.
 
-    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,unloading,residual,shared}
+    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,hyblog,unloading,residual,shared}
         [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--rig-weight R]
         [--stiffness-only]
 
@@ -121,8 +123,8 @@ def print_stiffness(training, is_walk, held_out, z_column):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
-    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'unloading',
-                                         'residual', 'shared'])
+    parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'hyblog',
+                                         'unloading', 'residual', 'shared'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -163,7 +165,7 @@ def main():
             return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
-        if form not in ('smooth', 'hybrid', 'unloading', 'residual'):
+        if form not in ('smooth', 'hybrid', 'hyblog', 'unloading', 'residual'):
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
@@ -173,7 +175,9 @@ def main():
                          extra, 1)
 
     F = features(X)
-    F_direction = features(X, 'homogeneous')  # the hybrid's second network's
+    # what the hybrid's second network sees: the increment's direction (hyblog: and log |d_eps|)
+    direction_form = 'homlog' if form == 'hyblog' else 'homogeneous'
+    F_direction = features(X, direction_form)
     direction_mean, direction_scale_in = F_direction.mean(0), F_direction.std(0, unbiased=False)
     direction_scale_in[direction_scale_in < 1e-12] = 1
     T = torch.cat([Y[:, :6] / pressure_scale(X), Y[:, 6:]], 1)  # d_sigma / s, d_Z
@@ -192,7 +196,7 @@ def main():
                 torch.nn.Tanh(), torch.nn.Linear(128, outputs))
 
             self.term_on = True
-            if form in ('hybrid', 'unloading', 'residual'):
+            if form in ('hybrid', 'hyblog', 'unloading', 'residual'):
                 self.direction_net = torch.nn.Sequential(
                     torch.nn.Linear(F_direction.shape[1], 128), torch.nn.Tanh(),
                     torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
@@ -207,10 +211,10 @@ def main():
                 at_rest = self.net((rest - in_mean) / in_scale)
                 return ((at[:, :n] - at_rest[:, :n]) * out_scale +
                         strain_norm(x[:, :6]) / step_reference * at[:, n:] * out_scale)
-            if form in ('hybrid', 'unloading', 'residual'):
+            if form in ('hybrid', 'hyblog', 'unloading', 'residual'):
                 rest = f.clone()
                 rest[:, :6] = 0
-                direction = (features(x, 'homogeneous') - direction_mean) / direction_scale_in
+                direction = (features(x, direction_form) - direction_mean) / direction_scale_in
                 gain = strain_norm(x[:, :6]) / step_reference
                 if form in ('unloading', 'residual'):
                     gain = gain * unloading_gate(x)
