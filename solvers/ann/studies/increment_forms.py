@@ -40,7 +40,7 @@ held_out.npy the recipe's held-out paths, then the rig's.
 
     python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,hyblog,unloading,residual,shared}
         [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--rig-weight R]
-        [--stiffness-only]
+        [--term-penalty L] [--stiffness-only]
 
 After the errors, each held-out rig path's steps answered one at a time from the RVE's own states
 (step_stiffness.py's figures: the members' |d_sigma| over the RVE's, loading and unloading steps
@@ -131,6 +131,9 @@ def main():
     parser.add_argument('--step-size-weighting', type=float, default=0, metavar='CAP')
     parser.add_argument('--rig-weight', type=float, default=1, metavar='R',
                         help="each training rig path's steps weigh R times a laboratory step")
+    parser.add_argument('--term-penalty', type=float, default=0, metavar='L',
+                        help="the hybrid forms' loss plus L times the term's mean square, in the "
+                             "loss's units, so that the term stays where the fit needs it")
     parser.add_argument('--stiffness-only', action='store_true',
                         help="print the paths' step sizes and stiffnesses only, no training")
     args = parser.parse_args()
@@ -214,15 +217,9 @@ def main():
             if form in ('hybrid', 'hyblog', 'unloading', 'residual'):
                 rest = f.clone()
                 rest[:, :6] = 0
-                direction = (features(x, direction_form) - direction_mean) / direction_scale_in
-                gain = strain_norm(x[:, :6]) / step_reference
-                if form in ('unloading', 'residual'):
-                    gain = gain * unloading_gate(x)
-                if not self.term_on:
-                    gain = gain * 0
                 return ((self.net((f - in_mean) / in_scale) -
                          self.net((rest - in_mean) / in_scale)) * out_scale +
-                        gain * self.direction_net(direction) * out_scale)
+                        self.term(x))
             if form != 'smooth':
                 return (strain_norm(x[:, :6]) / step_reference *
                         self.net((f - in_mean) / in_scale) * direction_scale)
@@ -230,6 +227,15 @@ def main():
             rest[:, :6] = 0  # anchored: no increment, no change
             return (self.net((f - in_mean) / in_scale) -
                     self.net((rest - in_mean) / in_scale)) * out_scale
+
+        def term(self, x):  # the hybrid's homogeneous term, in T's units
+            direction = (features(x, direction_form) - direction_mean) / direction_scale_in
+            gain = strain_norm(x[:, :6]) / step_reference
+            if form in ('unloading', 'residual'):
+                gain = gain * unloading_gate(x)
+            if not self.term_on:
+                gain = gain * 0
+            return gain * self.direction_net(direction) * out_scale
 
         def answer(self, x):  # d_sigma in Pa, d_Z
             t = self.forward(features(x), x)
@@ -263,6 +269,9 @@ def main():
                 if args.step_size_weighting > 0:
                     error = error / torch.clamp(magnitude[i], min=1 / args.step_size_weighting)
                 loss = (W[i, None] * error ** 2).mean()
+                if args.term_penalty > 0:
+                    loss = loss + args.term_penalty * (
+                        W[i, None] * (member.term(X[i]) / out_scale) ** 2).mean()
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
@@ -303,6 +312,8 @@ def main():
                  if args.step_size_weighting > 0 else '')
     if args.rig_weight != 1:
         weighting += f', rig steps weighed x{args.rig_weight:g}'
+    if args.term_penalty > 0:
+        weighting += f', term penalty {args.term_penalty:g}'
     print(f'{form}, {args.epochs} epochs, seed {args.seed}{weighting}: ' + ', '.join(figures))
     # step_stiffness.py's figures on the held-out rig paths: each step answered from the RVE's own
     # state, the members' |d_sigma| summed over the RVE's, loading and unloading steps apart.
