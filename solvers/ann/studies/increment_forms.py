@@ -137,6 +137,8 @@ def main():
     parser.add_argument('--stiffness-only', action='store_true',
                         help="print the paths' step sizes and stiffnesses only, no training")
     args = parser.parse_args()
+    if args.term_penalty > 0 and args.form not in ('hybrid', 'hyblog', 'unloading', 'residual'):
+        parser.error(f'--term-penalty: the {args.form} form has no homogeneous term')
     torch.set_num_threads(1)
     torch.set_default_dtype(torch.float64)
     directory, form = args.directory, args.form
