@@ -326,7 +326,6 @@ Eigen::VectorXd VectorOf(const torch::Tensor& tensor) {
   return Eigen::Map<const Eigen::VectorXd>(t.data_ptr<double>(), t.numel());
 }
 
-// The module's weights as the fused kernel's; throws c10::Error for a module without them.
 // The module's layers <weight_prefix>0, <bias_prefix>0, ... as Eigen matrices and vectors.
 void FusedLayers(const torch::jit::Module& module, const std::string& weight_prefix,
                  const std::string& bias_prefix, std::vector<Eigen::MatrixXd>* weights,
@@ -348,6 +347,7 @@ void FusedLayers(const torch::jit::Module& module, const std::string& weight_pre
   }
 }
 
+// The module's weights as the fused kernel's; throws c10::Error for a module without them.
 FusedMlp FusedOf(const torch::jit::Module& module, const std::string& architecture) {
   FusedMlp fused;
   FusedLayers(module, "w", "b", &fused.weights, &fused.biases);

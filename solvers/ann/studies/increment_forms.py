@@ -72,6 +72,11 @@ def strain_norm(d):
                       0.5 * (d[:, 3:] ** 2).sum(1, keepdim=True))
 
 
+# The forms with the homogeneous term beside the smooth network, and those whose term is gated.
+TERM_FORMS = ('hybrid', 'hyblog', 'unloading', 'residual')
+GATED_FORMS = ('unloading', 'residual')
+
+
 def unloading_gate(x):
     """max(0, -n : sigma / |sigma|) of raw input rows, (n, 1): n the increment's direction
     (engineering shears, so that n : sigma is the step's work on the stress), 1 where the step
@@ -137,7 +142,7 @@ def main():
     parser.add_argument('--stiffness-only', action='store_true',
                         help="print the paths' step sizes and stiffnesses only, no training")
     args = parser.parse_args()
-    if args.term_penalty > 0 and args.form not in ('hybrid', 'hyblog', 'unloading', 'residual'):
+    if args.term_penalty > 0 and args.form not in TERM_FORMS:
         parser.error(f'--term-penalty: the {args.form} form has no homogeneous term')
     torch.set_num_threads(1)
     torch.set_default_dtype(torch.float64)
@@ -170,7 +175,7 @@ def main():
             return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
-        if form not in ('smooth', 'hybrid', 'hyblog', 'unloading', 'residual'):
+        if form != 'smooth' and form not in TERM_FORMS:
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
@@ -201,7 +206,7 @@ def main():
                 torch.nn.Tanh(), torch.nn.Linear(128, outputs))
 
             self.term_on = True
-            if form in ('hybrid', 'hyblog', 'unloading', 'residual'):
+            if form in TERM_FORMS:
                 self.direction_net = torch.nn.Sequential(
                     torch.nn.Linear(F_direction.shape[1], 128), torch.nn.Tanh(),
                     torch.nn.Linear(128, 128), torch.nn.Tanh(), torch.nn.Linear(128, T.shape[1]))
@@ -216,7 +221,7 @@ def main():
                 at_rest = self.net((rest - in_mean) / in_scale)
                 return ((at[:, :n] - at_rest[:, :n]) * out_scale +
                         strain_norm(x[:, :6]) / step_reference * at[:, n:] * out_scale)
-            if form in ('hybrid', 'hyblog', 'unloading', 'residual'):
+            if form in TERM_FORMS:
                 rest = f.clone()
                 rest[:, :6] = 0
                 return ((self.net((f - in_mean) / in_scale) -
@@ -233,7 +238,7 @@ def main():
         def term(self, x):  # the hybrid's homogeneous term, in T's units
             direction = (features(x, direction_form) - direction_mean) / direction_scale_in
             gain = strain_norm(x[:, :6]) / step_reference
-            if form in ('unloading', 'residual'):
+            if form in GATED_FORMS:
                 gain = gain * unloading_gate(x)
             if not self.term_on:
                 gain = gain * 0
