@@ -624,10 +624,13 @@ grpc::Status MobilityServiceImpl::ExportDataset(grpc::ServerContext* context,
              "computed_by,compute_seconds,created_unix_ms,stopped_reason\n";
     for (size_t k = 0; k < rows.size(); ++k) {
       const cache::StoredHistory& r = rows[k];
-      index << k << "," << r.path_kind << "," << r.path_name << "," << r.role << "," << r.seed
-            << "," << r.steps << "," << r.fe_de_preset << "," << r.rve_version << ","
-            << r.code_version << "," << r.computed_by << "," << r.compute_seconds << ","
-            << r.created_unix_ms << "," << CsvQuoted(histories[k].stopped_reason) << "\n";
+      // Names are free text (a fallback path's names its model and wheel, commas included).
+      index << k << "," << CsvQuoted(r.path_kind) << "," << CsvQuoted(r.path_name) << ","
+            << CsvQuoted(r.role) << "," << r.seed << "," << r.steps << ","
+            << CsvQuoted(r.fe_de_preset) << "," << CsvQuoted(r.rve_version) << ","
+            << CsvQuoted(r.code_version) << "," << CsvQuoted(r.computed_by) << ","
+            << r.compute_seconds << "," << r.created_unix_ms << ","
+            << CsvQuoted(histories[k].stopped_reason) << "\n";
     }
     index.close();
     if (!index) return {grpc::StatusCode::INTERNAL, "cannot write the dataset's index"};

@@ -17,7 +17,9 @@
 #include <cstdlib>
 #include <regex>
 #include <sstream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "server_process.h"
 
@@ -69,6 +71,32 @@ std::string RegisteredId(const std::string& out) {
     return "";
   }
   return match[1];
+}
+
+// The fields of each line of a CSV table (RFC 4180: a quoted field may hold commas and doubled
+// quotes; no field here holds a line break).
+std::vector<std::vector<std::string>> CsvRows(const std::string& table) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(table);
+  for (std::string line; std::getline(lines, line);) {
+    std::vector<std::string> fields(1);
+    bool quoted = false;
+    for (std::size_t k = 0; k < line.size(); ++k) {
+      const char c = line[k];
+      if (quoted && c == '"' && k + 1 < line.size() && line[k + 1] == '"') {
+        fields.back() += '"';
+        ++k;
+      } else if (c == '"') {
+        quoted = !quoted;
+      } else if (c == ',' && !quoted) {
+        fields.emplace_back();
+      } else {
+        fields.back() += c;
+      }
+    }
+    rows.push_back(fields);
+  }
+  return rows;
 }
 
 size_t CountLines(const std::string& text) {
@@ -262,7 +290,7 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(rig_export.exit_code, 0) << rig_export.out;
   const std::string rig_index = ReadFile(dir.path() / "export2" / (dataset + ".paths.csv"));
   // The fe-ann curve above kept its fallback paths here too (training histories of their own).
-  const std::size_t curve_fallbacks = CountOccurrences(rig_index, ",fallback,fallback ");
+  const std::size_t curve_fallbacks = CountOccurrences(rig_index, ",fallback,\"fallback ");
   EXPECT_NE(with_rig_listed.out.find("histories: " + std::to_string(33 + curve_fallbacks) + " (" +
                                      std::to_string(24 + curve_fallbacks) +
                                      " training, 9 held out)"),
@@ -422,12 +450,21 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(kept_export.exit_code, 0) << kept_export.out;
   const std::string kept_index =
       ReadFile(dir.path() / "export4" / (dataset + "+coordination_number.paths.csv"));
-  const std::size_t fallback_paths = CountOccurrences(kept_index, ",fallback,fallback ");
+  const std::size_t fallback_paths = CountOccurrences(kept_index, ",fallback,\"fallback ");
   std::cout << "  the carrying model's curve kept " << fallback_paths << " fallback paths\n";
   ASSERT_GT(fallback_paths, 0u) << kept_index;
-  EXPECT_NE(kept_index.find("model " + carrying_id + ", 0.5 x 0.2 m wheel at 1000 N,training,"),
-            std::string::npos)
-      << kept_index;
+  // A fallback path's name holds commas: quoted, so that every row reads as the header's 13 fields.
+  std::size_t fallback_rows = 0;
+  for (const std::vector<std::string>& row : CsvRows(kept_index)) {
+    ASSERT_EQ(row.size(), 13u) << kept_index;
+    if (row[1] != "fallback") continue;
+    ++fallback_rows;
+    EXPECT_NE(row[2].find(", model " + carrying_id + ", 0.5 x 0.2 m wheel at 1000 N"),
+              std::string::npos)
+        << row[2];
+    EXPECT_EQ(row[3], "training");
+  }
+  EXPECT_EQ(fallback_rows, fallback_paths);
   // The recipe's walks weighed too: they carry half the recipe paths' loss, the fallback paths
   // 20 % of the whole.
   const CliRun refined =
