@@ -614,6 +614,7 @@ int Run(const StudyCommandLine& line) {
     MlpArchitecture architecture = ParseArchitecture(text);
     architecture.anchored = !line.unanchored;
     architecture.homogeneous_term = line.hybrid;
+    architecture.previous_direction = line.previous_direction;
     architecture.pressure_reference_pa = line.pressure_reference_pa;
     architecture.carried_variables = line.carried;
     TrainingOptions options = StudyTraining(line, history_weights);

@@ -45,6 +45,13 @@ Vector6 StrainIncrementOf(const Matrix3& increment) {
   return material::StrainToVoigt(material::HughesWinget(increment).strain_increment);
 }
 
+// The direction of the last increment the point took (SurrogateInput::previous_direction): zero
+// before its first, as at a training path's first step.
+Vector6 PreviousDirectionOf(const AnnState& committed) {
+  return committed.history ? IncrementDirection(StrainIncrementOf(committed.history->increment))
+                           : Vector6::Zero();
+}
+
 material::PointResponse Failed(const std::string& reason) {
   material::PointResponse response;
   response.status = material::UpdateStatus::kFailed;
@@ -371,6 +378,7 @@ std::vector<bool> AnnMaterial::WouldFlag(const std::vector<material::PointIncrem
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
     input.internal_variables = CarriedOf(RealStateOf(*committed.fallback));
+    input.previous_direction = PreviousDirectionOf(committed);
     inputs.push_back(input);
     asked.push_back(k);
   }
@@ -402,6 +410,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
     input.internal_variables = committed.internal_variables;
+    input.previous_direction = PreviousDirectionOf(committed);
     on_network.push_back(i);
     inputs.push_back(input);
     kinematics.push_back(std::move(split));

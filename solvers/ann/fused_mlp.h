@@ -36,7 +36,8 @@ struct FusedMlp {
   Eigen::VectorXd direction_in_mean, direction_in_scale;
   double step_reference = 1, step_delta = 0;
 
-  // raw_inputs: (18 + V) x N (one point per column, V carried internal variables last); returns
+  // raw_inputs: (18 + V) x N (one point per column, V carried internal variables last; then the
+  // previous direction's 6 for MlpArchitecture::previous_direction, read as the rest); returns
   // (6 + V) x N: d_sigma (Pa), then the carried variables' increments; with `tangents`, one 6 x 6
   // d(d_sigma)/d(d_eps) per point (the stress rows).
   Eigen::MatrixXd Evaluate(const Eigen::MatrixXd& raw_inputs,

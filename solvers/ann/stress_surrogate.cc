@@ -44,12 +44,13 @@ void RequireCarried(const std::vector<SurrogateInput>& inputs,
 }
 
 // The raw inputs, one row per point: [d_eps, sigma_n, eps_n, the carried internal variables]
-// (18 + V columns), or [d_eps, sigma_n] (12, the recurrent surrogate's, whose hidden state stands
-// in for the rest).
-torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, bool recurrent = false) {
+// (18 + V columns), then the previous step's direction with `previous_direction` (24 + V), or
+// [d_eps, sigma_n] (12, the recurrent surrogate's, whose hidden state stands in for the rest).
+torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, bool previous_direction,
+                          bool recurrent = false) {
   const int carried =
       recurrent || inputs.empty() ? 0 : static_cast<int>(inputs.front().internal_variables.size());
-  const int columns = recurrent ? 12 : kInputs + carried;
+  const int columns = recurrent ? 12 : kInputs + carried + (previous_direction ? 6 : 0);
   torch::Tensor x = torch::empty({static_cast<std::int64_t>(inputs.size()), columns},
                                  torch::kFloat64);
   double* data = x.data_ptr<double>();
@@ -60,6 +61,9 @@ torch::Tensor InputTensor(const std::vector<SurrogateInput>& inputs, bool recurr
       if (!recurrent) data[n * columns + 12 + c] = inputs[n].accumulated_strain[c];
     }
     for (int v = 0; v < carried; ++v) data[n * columns + kInputs + v] = inputs[n].internal_variables[v];
+    for (int c = 0; c < 6 && previous_direction; ++c) {
+      data[n * columns + kInputs + carried + c] = inputs[n].previous_direction[c];
+    }
   }
   return x;
 }
@@ -173,8 +177,9 @@ torch::Tensor PressureScale(const torch::Tensor& stress_pa, double reference_pa)
   return (-stress_pa.slice(1, 0, 3).sum(1, /*keepdim=*/true) / 3).clamp_min(0) + reference_pa;
 }
 
-// What the network sees of raw input rows (N, 18 + V): the rows themselves unscaled; scaled
-// (reference_pa > 0), the stress columns over s and log(s / p_ref) appended (N, 19 + V).
+// What the network sees of raw input rows (N, 18 + V, or 24 + V with the previous direction): the
+// rows themselves unscaled; scaled (reference_pa > 0), the stress columns over s and log(s / p_ref)
+// appended (one column more).
 torch::Tensor Features(const torch::Tensor& raw, double reference_pa) {
   if (reference_pa <= 0) return raw;
   const torch::Tensor scale = PressureScale(raw.slice(1, 6, 12), reference_pa);
@@ -257,9 +262,12 @@ torch::jit::Module ScriptModule(const std::vector<torch::Tensor>& weights,
                                 const torch::Tensor& out_mean, const torch::Tensor& out_scale,
                                 const std::string& architecture, bool anchored,
                                 const std::vector<std::string>& carried, double reference_pa,
-                                const DirectionNetwork& direction = {}) {
+                                bool previous_direction, const DirectionNetwork& direction = {}) {
   torch::jit::Module module("StressSurrogate");
   module.register_attribute("carried_variables", c10::StringType::get(), Joined(carried, ","));
+  // MlpArchitecture::previous_direction: the raw rows end with its 6 columns (forward and the
+  // networks read them as they read the carried variables, among the columns after 12).
+  module.register_attribute("previous_direction", c10::BoolType::get(), previous_direction);
   module.register_buffer("in_mean", in_mean.detach().clone());
   module.register_buffer("in_scale", in_scale.detach().clone());
   module.register_buffer("out_mean", out_mean.detach().clone());
@@ -317,6 +325,7 @@ struct StressSurrogate::Impl {
   std::string architecture;
   FusedMlp fused;  // the module's weights, for evaluation (fused_mlp.h)
   std::vector<std::string> carried;  // MlpArchitecture::carried_variables
+  bool previous_direction = false;   // MlpArchitecture::previous_direction
 };
 
 namespace {
@@ -432,6 +441,7 @@ std::string MlpArchitecture::Describe() const {
     name += "-pressure-scaled-" + reference.str() + "pa";
   }
   if (!carried_variables.empty()) name += "-carrying-" + Joined(carried_variables, "+");
+  if (previous_direction) name += "-previous-direction";
   return name;
 }
 
@@ -480,6 +490,14 @@ const std::vector<std::string>& StressSurrogate::carried_variables() const {
   return impl_->carried;
 }
 
+bool StressSurrogate::reads_previous_direction() const { return impl_->previous_direction; }
+
+Vector6 IncrementDirection(const Vector6& strain_increment) {
+  const double size = std::sqrt(strain_increment.head<3>().squaredNorm() +
+                                0.5 * strain_increment.tail<3>().squaredNorm());
+  return size > 0 ? Vector6(strain_increment / size) : Vector6::Zero();
+}
+
 std::vector<SurrogateInput> InputsOf(const StrainHistory& history,
                                      const std::vector<std::string>& carried) {
   const std::vector<std::size_t> columns = CarriedColumns(history, carried);
@@ -494,6 +512,7 @@ std::vector<SurrogateInput> InputsOf(const StrainHistory& history,
     input.stress_pa = stress;
     input.accumulated_strain = accumulated;
     input.internal_variables = CarriedBefore(history, columns, s);
+    if (s > 0) input.previous_direction = IncrementDirection(inputs.back().strain_increment);
     inputs.push_back(input);
     accumulated += input.strain_increment;
     stress = history.stresses_pa[s];
@@ -522,6 +541,7 @@ StressSurrogate StressSurrogate::FineTune(const StressSurrogate& base,
   architecture.pressure_reference_pa = base.impl_->fused.pressure_reference_pa;
   architecture.carried_variables = base.impl_->carried;
   architecture.homogeneous_term = !base.impl_->fused.direction_weights.empty();
+  architecture.previous_direction = base.impl_->previous_direction;
   return TrainFrom(histories, architecture, options, report, &base);
 }
 
@@ -586,7 +606,7 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     throw InputError("training.rollout_steps",
                      "every history is shorter than " + std::to_string(rollout_steps) + " steps");
   }
-  const torch::Tensor x = InputTensor(inputs);
+  const torch::Tensor x = InputTensor(inputs, architecture.previous_direction);
   torch::Tensor y = torch::empty({static_cast<std::int64_t>(targets.size()), outputs},
                                  torch::kFloat64);
   for (std::size_t n = 0; n < targets.size(); ++n) {
@@ -677,8 +697,8 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
 
   torch::set_num_threads(options.threads);
   torch::manual_seed(options.seed);
-  const int network_inputs =
-      kInputs + static_cast<int>(carried.size()) + (reference_pa > 0 ? 1 : 0);
+  const int network_inputs = kInputs + static_cast<int>(carried.size()) +
+                             (architecture.previous_direction ? 6 : 0) + (reference_pa > 0 ? 1 : 0);
   std::vector<torch::nn::Linear> layers;
   torch::nn::Sequential net =
       TanhNetwork(network_inputs, architecture.hidden_widths, outputs, &layers);
@@ -722,7 +742,10 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
       const torch::Tensor recorded = x.index_select(0, step);
       const torch::Tensor strain_increment = recorded.slice(1, 0, 6);
       const torch::Tensor accumulated = recorded.slice(1, 12, kInputs);
-      const torch::Tensor state = torch::cat({stress, accumulated, carried_now}, 1);
+      // The previous direction (MlpArchitecture::previous_direction; no columns without it) is
+      // the recorded one: the window's increments are given.
+      const torch::Tensor state = torch::cat(
+          {stress, accumulated, carried_now, recorded.slice(1, kInputs + carried_count)}, 1);
       torch::Tensor raw = torch::cat({strain_increment, state}, 1);
       // Anchored: the answer at rest from the same forward pass, the two stacked.
       if (architecture.anchored) {
@@ -832,10 +855,11 @@ StressSurrogate StressSurrogate::TrainFrom(const std::vector<StrainHistory>& his
     direction.weights.push_back(layer->weight);
     direction.biases.push_back(layer->bias);
   }
-  auto impl = std::make_unique<Impl>(Impl{
-      ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale, architecture.Describe(),
-                   architecture.anchored, carried, reference_pa, direction),
-      architecture.Describe(), FusedMlp{}, carried});
+  auto impl = std::make_unique<Impl>(
+      Impl{ScriptModule(weights, biases, in_mean, in_scale, out_mean, out_scale,
+                        architecture.Describe(), architecture.anchored, carried, reference_pa,
+                        architecture.previous_direction, direction),
+           architecture.Describe(), FusedMlp{}, carried, architecture.previous_direction});
   impl->fused = FusedOf(impl->module, impl->architecture);
   figures.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -848,13 +872,15 @@ std::vector<Vector6> StressSurrogate::StressIncrements(
     std::vector<Eigen::VectorXd>* internal_increments) const {
   RequireCarried(inputs, impl_->carried);
   const Eigen::Index carried = static_cast<Eigen::Index>(impl_->carried.size());
-  Eigen::MatrixXd x(kInputs + carried, static_cast<Eigen::Index>(inputs.size()));
+  const Eigen::Index previous = impl_->previous_direction ? 6 : 0;
+  Eigen::MatrixXd x(kInputs + carried + previous, static_cast<Eigen::Index>(inputs.size()));
   for (std::size_t n = 0; n < inputs.size(); ++n) {
     const auto column = static_cast<Eigen::Index>(n);
     x.col(column).segment<6>(0) = inputs[n].strain_increment;
     x.col(column).segment<6>(6) = inputs[n].stress_pa;
     x.col(column).segment<6>(12) = inputs[n].accumulated_strain;
-    x.col(column).tail(carried) = inputs[n].internal_variables;
+    x.col(column).segment(kInputs, carried) = inputs[n].internal_variables;
+    x.col(column).tail(previous) = inputs[n].previous_direction;
   }
   const Eigen::MatrixXd y = impl_->fused.Evaluate(x, tangents);
   std::vector<Vector6> increments(inputs.size());
@@ -879,7 +905,7 @@ std::vector<Vector6> StressSurrogate::StressIncrementsByModule(
     if (tangents != nullptr) tangents->clear();
     return increments;
   }
-  torch::Tensor x = InputTensor(inputs);
+  torch::Tensor x = InputTensor(inputs, impl_->previous_direction);
   torch::Tensor y;
   if (tangents == nullptr) {
     torch::NoGradGuard no_grad;
@@ -935,6 +961,9 @@ StressSurrogate StressSurrogate::FromStream(std::istream& in, const std::string&
     impl->module.eval();
     impl->fused = FusedOf(impl->module, impl->architecture);
     impl->carried = CarriedOf(impl->module);
+    // A module saved before the input existed has no such attribute: it reads no direction.
+    impl->previous_direction = impl->module.hasattr("previous_direction") &&
+                               impl->module.attr("previous_direction").toBool();
   } catch (const c10::Error& e) {
     throw InputError("model", "not a gonogo stress surrogate (" + what + "): " +
                                   e.what_without_backtrace());
@@ -958,7 +987,7 @@ namespace {
 constexpr int kRecurrentInputs = 12;
 
 torch::Tensor RecurrentInputTensor(const std::vector<SurrogateInput>& inputs) {
-  return InputTensor(inputs, /*recurrent=*/true);
+  return InputTensor(inputs, /*previous_direction=*/false, /*recurrent=*/true);
 }
 
 // d_sigma = sigma_{n+1} - R sigma_n R^T of every step of a history.
@@ -1171,6 +1200,7 @@ std::vector<Vector6> Replay(const SurrogateStepFunction& step, const StrainHisto
     if (admissible) after = material::StressToVoigt(admissible(material::VoigtToStress(after)));
     stresses.push_back(after);
     input.accumulated_strain += input.strain_increment;
+    input.previous_direction = IncrementDirection(input.strain_increment);
     input.stress_pa = after;
     if (input.internal_variables.size() > 0) {
       input.internal_variables += output.internal_variable_increments;

@@ -72,10 +72,21 @@ struct MlpArchitecture {
   // makes it differentiable at a zero increment, where its tangent is 0. README: "A rig step is
   // answered linearly".
   bool homogeneous_term = false;
+  // The previous step's increment direction n_{n-1} = d_eps_{n-1} / |d_eps_{n-1}| (zero at a
+  // path's first step and after a step that did not move) as six further inputs, after the
+  // carried variables (off by default). A history variable a point carries exactly: along a rig
+  // path consecutive steps turn little (their directions' cosine has median 0.999), so at a rig
+  // step's size, where the network answers linearly, d_sigma = J(state, n_{n-1}) d_eps may
+  // differ between a step that goes on loading and one that goes on unloading, which a network
+  // of the present state alone answers alike but for the sign; along a random walk the steps are
+  // uncorrelated, so the walks teach the response to a step after any other. README: "The
+  // previous step's direction".
+  bool previous_direction = false;
   void Validate(const std::string& field_prefix) const;
   // "mlp-64x64-tanh-anchored" ("mlp-64x64-tanh" unanchored), then "-hybrid" with the homogeneous
   // term, then "-pressure-scaled-<p_ref>pa"
-  // when scaled, then "-carrying-" and the carried variables joined by "+" when there are any.
+  // when scaled, then "-carrying-" and the carried variables joined by "+" when there are any,
+  // then "-previous-direction" with that input.
   std::string Describe() const;
 };
 
@@ -139,7 +150,14 @@ struct SurrogateInput {
   Vector6 accumulated_strain = Vector6::Zero();  // since the path's start, engineering shears
   // The carried internal variables before the step, in the network's order (empty: none).
   Eigen::VectorXd internal_variables;
+  // The previous step's increment direction (IncrementDirection of its strain increment; zero at
+  // the first step), read by a network with MlpArchitecture::previous_direction only.
+  Vector6 previous_direction = Vector6::Zero();
 };
+
+// d_eps / |d_eps| of a strain increment (engineering shears; |d_eps| the tensor norm, the shears
+// halved in its square), zero for a zero increment.
+Vector6 IncrementDirection(const Vector6& strain_increment);
 
 class StressSurrogate {
  public:
@@ -177,9 +195,11 @@ class StressSurrogate {
                                                     internal_increments = nullptr) const;
 
   // TorchScript (torch.jit.load in Python: forward takes an (N, 18 + V) float64 tensor of the
-  // inputs above, V carried variables last, and gives (N, 6 + V): d_sigma, then the carried
-  // variables' increments; the module's attribute carried_variables names them, comma-separated). Load throws InputError("model", ...) for a file that is not
-  // such a module.
+  // inputs above, V carried variables last (then the previous direction's 6 with
+  // MlpArchitecture::previous_direction; the module's attribute previous_direction says so), and
+  // gives (N, 6 + V): d_sigma, then the carried
+  // variables' increments; the module's attribute carried_variables names them, comma-separated).
+  // Load throws InputError("model", ...) for a file that is not such a module.
   void Save(const std::string& path) const;
   static StressSurrogate Load(const std::string& path);
   // The same TorchScript file as bytes (a trained member crossing ranks); FromBytes throws as Load.
@@ -188,6 +208,7 @@ class StressSurrogate {
 
   std::string architecture() const;
   const std::vector<std::string>& carried_variables() const;
+  bool reads_previous_direction() const;  // MlpArchitecture::previous_direction
 
  private:
   struct Impl;

@@ -27,6 +27,9 @@ void AddStudyOptions(CLI::App& app, StudyCommandLine& line) {
   app.add_flag("--hybrid", line.hybrid,
                "MLPs with a second network's term homogeneous in the strain increment beside the "
                "anchored one (MlpArchitecture::homogeneous_term)");
+  app.add_flag("--previous-direction", line.previous_direction,
+               "MLPs that also see the previous step's increment direction "
+               "(MlpArchitecture::previous_direction)");
   app.add_flag("--unanchored", line.unanchored,
                "MLPs without the at-rest anchor (d_sigma(0) = 0; stress_surrogate.h)");
   app.add_option("--pressure-scaled", line.pressure_reference_pa,

@@ -20,6 +20,7 @@ struct StudyCommandLine {
   std::vector<double> pressures_kpa;  // empty: the recipe's
   bool unanchored = false;
   bool hybrid = false;               // MlpArchitecture::homogeneous_term
+  bool previous_direction = false;   // MlpArchitecture::previous_direction
   double pressure_reference_pa = 0;  // MlpArchitecture::pressure_reference_pa
   double rig_load_n = 0;             // 0: no rig paths
   double rig_diameter_m = 0.5;

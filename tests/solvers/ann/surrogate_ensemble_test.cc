@@ -576,6 +576,51 @@ TEST(AnnMaterial, RecordsEachFallenBackPointsPathOnTheRealModel) {
 // variable from the real model's state a point starts from and carries it step by step, close to
 // the soil's along a shear past yield; a state saves and restores with it. Without a reader of the
 // real state, or with one that does not read the variable, the material is refused by name.
+// MlpArchitecture::previous_direction at the seam: the material gives the network each point's
+// last increment's direction (zero before the first), so a point driven along a shear answers as
+// the ensemble replays the shear with the directions (to rounding), and not as it would with none.
+TEST(AnnMaterial, GivesANetworkThatReadsItThePointsPreviousDirection) {
+  TrainingOptions options;
+  options.epochs = 40;
+  options.batch_size = 64;
+  MlpArchitecture architecture;
+  architecture.hidden_widths = {16, 16};
+  architecture.previous_direction = true;
+  const auto ensemble = std::make_shared<const SurrogateEnsemble>(
+      SurrogateEnsemble::Train(TrainingPaths(), architecture, options));
+  AnnMaterialOptions material_options;
+  material_options.fallback_enabled = false;  // the network answers every step
+  const AnnMaterial ann(ensemble, SharedSoil(), material_options);
+  const StrainHistory shear = Path(LabPath::kSimpleShear, 25e3, 0.04);
+  std::unique_ptr<material::MaterialState> state = ann.InitialState();
+  std::vector<Vector6> on_material;
+  for (const Matrix3& increment : shear.increments) {
+    std::vector<material::PointResponse> step = ann.Update({{increment, state.get()}}, false);
+    ASSERT_EQ(step[0].status, material::UpdateStatus::kOk) << step[0].reason;
+    state = std::move(step[0].state);
+    on_material.push_back(material::StressToVoigt(static_cast<const AnnState&>(*state).stress_pa));
+  }
+  const std::vector<Vector6> replayed = Replay(*ensemble, shear);
+  const std::vector<Vector6> without = Replay(
+      [&](SurrogateInput input) {
+        input.previous_direction.setZero();
+        const EnsembleAnswer answer = ensemble->Answer({input}, false)[0];
+        return SurrogateOutput{answer.stress_increment_pa, answer.internal_variable_increments};
+      },
+      shear, {}, [&](const Matrix3& stress_pa) { return ensemble->Admissible(stress_pa); });
+  double largest = 0, off = 0, off_without = 0;
+  for (std::size_t s = 0; s < shear.steps(); ++s) {
+    largest = std::max(largest, replayed[s].cwiseAbs().maxCoeff());
+    off = std::max(off, (on_material[s] - replayed[s]).cwiseAbs().maxCoeff());
+    off_without = std::max(off_without, (on_material[s] - without[s]).cwiseAbs().maxCoeff());
+  }
+  std::cout << "  a shear at 25 kPa through the seam: " << off << " Pa from the ensemble's replay "
+            << "with the directions, " << off_without << " Pa from one without (largest stress "
+            << largest << " Pa)\n";
+  EXPECT_LT(off, 1e-9 * largest);
+  EXPECT_GT(off_without, 1e-3 * largest);
+}
+
 TEST(AnnMaterial, CarriesTheEnsemblesInternalVariableFromTheRealModelsState) {
   const InternalVariables plastic = testing::PlasticStrain();
   TrainingOptions options;
