@@ -231,6 +231,10 @@ Command AddTrainCommand(CLI::App& parent) {
       "each member also has a second network's term homogeneous in the strain increment "
       "(solvers/ann/README.md; off by default: it replays the rig's unloading closer and moves "
       "the curve further from fe-de's)");
+  train->add_flag_function(
+      "--previous-direction", [&r](int64_t) { r.set_previous_direction(true); },
+      "each member also sees the previous step's strain increment direction "
+      "(solvers/ann/README.md; off by default)");
   train
       ->add_option_function<double>(
           "--walk-share", [&r](double v) { r.set_walk_share(v); },

@@ -108,6 +108,9 @@ tiers::SurrogateRecipe RecipeOf(const v1::TrainSurrogateRequest& request, bool f
   Require(!(request.hybrid() && request.unanchored()), "hybrid",
           "needs the anchored network (not unanchored)");
   recipe.architecture.homogeneous_term = request.hybrid();
+  Require(!(fine_tuning && request.previous_direction()), "previous_direction",
+          "a fine-tuned model keeps its base model's form");
+  recipe.architecture.previous_direction = request.previous_direction();
   recipe.walk_share = request.walk_share();
   recipe.architecture.Validate("");
   if (request.carried_variables_size() > 0) {
@@ -708,6 +711,7 @@ void JobManager::RunTrainJob(const cache::JobRecord& rec, const std::shared_ptr<
     member_work.set_anchored(recipe.architecture.anchored);
     member_work.set_pressure_reference_pa(recipe.architecture.pressure_reference_pa);
     member_work.set_homogeneous_term(recipe.architecture.homogeneous_term);
+    member_work.set_previous_direction(recipe.architecture.previous_direction);
     for (int width : recipe.architecture.hidden_widths) member_work.add_hidden_widths(width);
     for (const std::string& name : recipe.architecture.carried_variables) {
       member_work.add_carried_variables(name);

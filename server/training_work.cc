@@ -79,6 +79,7 @@ std::string TrainMember(const v1::TrainMemberWork& work, const ComputeContext& c
     architecture.anchored = work.anchored();
     architecture.pressure_reference_pa = work.pressure_reference_pa();
     architecture.homogeneous_term = work.homogeneous_term();
+    architecture.previous_direction = work.previous_direction();
     architecture.carried_variables.assign(work.carried_variables().begin(),
                                           work.carried_variables().end());
     architecture.Validate("training.train_member.");

@@ -40,6 +40,7 @@ std::string Replaced(std::string text, const std::string& from, const std::strin
 std::string ShortArchitecture(std::string architecture) {
   for (const auto& [from, to] : {std::pair<const char*, const char*>{"-tanh", ""},
                                  {"-hybrid", "-hy"},
+                                 {"-previous-direction", "-pd"},
                                  {"-pressure-scaled-", "-ps"},
                                  {"-carrying-", "-"},
                                  {"coordination_number", "cn"},

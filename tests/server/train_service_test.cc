@@ -180,6 +180,18 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
                                        "fine-tuned"),
             std::string::npos)
       << hybrid_fine_tuned.out;
+  // Networks that also see the previous step's direction, on the same data.
+  const CliRun directed =
+      Gonogo(server.endpoint(), std::string("train ") + kRecipe +
+                                    " --hidden 16x16 --previous-direction --pressure-scaled 500");
+  ASSERT_EQ(directed.exit_code, 0) << directed.out;
+  EXPECT_NE(directed.out.find("tasks 30/30  cache hits 27"), std::string::npos) << directed.out;
+  EXPECT_NE(directed.out.find(
+                "mlp-16x16-tanh-anchored-pressure-scaled-500pa-previous-direction, 3 members"),
+            std::string::npos)
+      << directed.out;
+  const std::string directed_model = RegisteredId(directed.out);
+  EXPECT_NE(directed_model.find("-ps500pa-pd-"), std::string::npos) << directed_model;
 
   // The offline trainer on the same recipe, registering into the same data directory.
   const CliRun offline_run = RegisterWithGonogoAnn(data, " --walk-share 0.6");
@@ -271,6 +283,11 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
   ASSERT_EQ(hybrid_curve.exit_code, 0) << hybrid_curve.out;
   EXPECT_NE(hybrid_curve.out.find("surrogate model " + hybrid_model), std::string::npos)
       << hybrid_curve.out;
+  // And the one that sees the previous direction, each point's last increment given to it.
+  const CliRun directed_curve = FeAnnCurve(server.endpoint(), directed_model);
+  ASSERT_EQ(directed_curve.exit_code, 0) << directed_curve.out;
+  EXPECT_NE(directed_curve.out.find("surrogate model " + directed_model), std::string::npos)
+      << directed_curve.out;
 
   // Seed 000's step 2: the paths of a rig run's points join the data, the run on one worker.
   const CliRun with_rig = Gonogo(server.endpoint(), std::string("train ") + kRecipe +
@@ -403,6 +420,8 @@ TEST(TrainService, TrainsOnThePoolReusesItsDatasetAndMatchesTheOfflineTrainer) {
        "hybrid: needs the anchored network (not unanchored)"},
       {"train --soil seed000_sand_rve100 --from " + trained + " --hybrid",
        "hybrid: a fine-tuned model keeps its base model's form"},
+      {"train --soil seed000_sand_rve100 --from " + trained + " --previous-direction",
+       "previous_direction: a fine-tuned model keeps its base model's form"},
   };
   for (const auto& [args, message] : refusals) {
     const CliRun refused = Gonogo(server.endpoint(), args);
