@@ -25,6 +25,13 @@ and cone), printing each path's error (mean |sigma error| over the path's mean |
   residual     the unloading form trained in two stages: the smooth network alone (as `smooth`),
                then, that network frozen, the gated term on what it leaves, so that a loading
                step is answered as by its smooth network alone.
+  prevdir      the smooth form with the previous step's increment direction a further input
+               (d_eps_(k-1) / |d_eps_(k-1)|, zero at a path's first step): a history variable a
+               point can carry exactly. Along a rig path the steps turn little (the cosine of
+               consecutive directions has median 0.999), so it tells a rig step whether it loads or
+               unloads, and a smooth network may then answer the two with different stiffnesses;
+               along a walk the steps are uncorrelated (median cosine 0.11), so the walks teach the
+               response to a step after any other.
   shared       the same two terms from one network of twice the outputs, which sees the
                increment and its direction: d_sigma = s (A(x) - A(x_0) + |d_eps| B(x)), [A, B] =
                N(d_eps, d_eps / |d_eps|, ...), x_0 the same with no increment; as costly as the
@@ -38,7 +45,7 @@ DIR: the --out of `gonogo-ann --rig-load-n W --rig-points N --carry coordination
 training.npy holds the recipe's 16 laboratory paths, then the walks, then the rig's paths, and
 held_out.npy the recipe's held-out paths, then the rig's.
 
-    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,hyblog,unloading,residual,shared}
+    python3 solvers/ann/studies/increment_forms.py DIR {smooth,homogeneous,homlog,hybrid,hyblog,unloading,residual,prevdir,shared}
         [--epochs 200] [--seed 2] [--members 3] [--step-size-weighting CAP] [--rig-weight R]
         [--term-penalty L] [--stiffness-only]
 
@@ -94,12 +101,21 @@ def pressure_scale(x):
     return torch.clamp(-x[:, 6:9].sum(1, keepdim=True) / 3, min=0) + PRESSURE_REFERENCE_PA
 
 
+def with_previous_direction(x):
+    """Raw input rows of one path in order, [d_eps, sigma_n, eps_n, Z_n], with the previous step's
+    increment direction appended (zero at the first step and after a step that did not move)."""
+    size = np.sqrt((x[:, :3] ** 2).sum(1) + 0.5 * (x[:, 3:6] ** 2).sum(1))[:, None]
+    direction = np.where(size > 0, x[:, :6] / np.maximum(size, 1e-300), 0)
+    return np.hstack([x, np.vstack([np.zeros(6), direction[:-1]])])
+
+
 def steps_of(rows, z_column):
-    """A history's raw inputs [d_eps, sigma_n, eps_n, Z_n] and changes [d_sigma, d_Z]."""
+    """A history's raw inputs [d_eps, sigma_n, eps_n, Z_n, n_(k-1)] and changes [d_sigma, d_Z]."""
     increments, rotations = kinematics(rows[1:, 2:11].reshape(-1, 3, 3))
     before, after = rows[:-1, 11:17], rows[1:, 11:17]
     accumulated = np.vstack([np.zeros(6), np.cumsum(increments, 0)[:-1]])
-    x = np.hstack([increments, before, accumulated, rows[:-1, z_column:z_column + 1]])
+    x = with_previous_direction(
+        np.hstack([increments, before, accumulated, rows[:-1, z_column:z_column + 1]]))
     turned = voigts(rotations @ tensors(before) @ np.swapaxes(rotations, -1, -2))
     y = np.hstack([after - turned, rows[1:, z_column:z_column + 1] - rows[:-1, z_column:z_column + 1]])
     return x, y
@@ -129,7 +145,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('directory')
     parser.add_argument('form', choices=['smooth', 'homogeneous', 'homlog', 'hybrid', 'hyblog',
-                                         'unloading', 'residual', 'shared'])
+                                         'unloading', 'residual', 'prevdir', 'shared'])
     parser.add_argument('--epochs', type=int, default=200)
     parser.add_argument('--seed', type=int, default=2)
     parser.add_argument('--members', type=int, default=3)
@@ -175,13 +191,15 @@ def main():
             return torch.cat([x[:, :6], features(x, 'homogeneous')], 1)
         d = x[:, :6]
         extra = []
-        if form != 'smooth' and form not in TERM_FORMS:
+        if form not in ('smooth', 'prevdir') and form not in TERM_FORMS:
             h = strain_norm(d)
             d = torch.where(h > 0, d / torch.clamp(h, min=1e-300), torch.zeros_like(d))
             if form == 'homlog':
                 extra = [torch.log(torch.clamp(h, min=1e-12) / step_reference)]
+        if form == 'prevdir':
+            extra = [x[:, 19:25]]
         s = pressure_scale(x)
-        return torch.cat([d, x[:, 6:12] / s, x[:, 12:], torch.log(s / PRESSURE_REFERENCE_PA)] +
+        return torch.cat([d, x[:, 6:12] / s, x[:, 12:19], torch.log(s / PRESSURE_REFERENCE_PA)] +
                          extra, 1)
 
     F = features(X)
@@ -227,7 +245,7 @@ def main():
                 return ((self.net((f - in_mean) / in_scale) -
                          self.net((rest - in_mean) / in_scale)) * out_scale +
                         self.term(x))
-            if form != 'smooth':
+            if form not in ('smooth', 'prevdir'):
                 return (strain_norm(x[:, :6]) / step_reference *
                         self.net((f - in_mean) / in_scale) * direction_scale)
             rest = f.clone()
@@ -303,7 +321,9 @@ def main():
         stress, z, accumulated = rows[0, 11:17].copy(), rows[0, z_column], np.zeros(6)
         replayed = []
         for step in range(len(increments)):
-            x = torch.from_numpy(np.hstack([increments[step], stress, accumulated, [z]])[None])
+            previous = with_previous_direction(increments[max(step - 1, 0):step + 1])[-1, 6:]
+            x = torch.from_numpy(
+                np.hstack([increments[step], stress, accumulated, [z], previous])[None])
             with torch.no_grad():
                 change = np.mean([m.answer(x).numpy() for m in members], 0)[0]
             turned = rotations[step] @ tensors(stress) @ rotations[step].T
@@ -328,6 +348,7 @@ def main():
         if len(rows) != RIG_ROWS:
             continue
         inputs, rve, loading = step_inputs(rows, [z_column])
+        inputs = with_previous_direction(inputs)
         with torch.no_grad():
             answer = np.mean([m.answer(torch.from_numpy(inputs)).numpy()[:, :6]
                               for m in members], 0)
