@@ -667,6 +667,71 @@ TEST(StressSurrogate, APressureScaledNetworkTakesAndAnswersRawValues) {
   }
 }
 
+// The autograd tangent of `surrogate` on `inputs` against central differences of its answers.
+void ExpectTangentIsItsDerivative(const StressSurrogate& surrogate,
+                                  const std::vector<SurrogateInput>& inputs) {
+  double largest_entry = 0;
+  const double tangent_error = LargestTangentError(surrogate, inputs, &largest_entry);
+  std::cout << "  " << surrogate.architecture() << " tangent: largest entry " << largest_entry
+            << " Pa, " << tangent_error << " Pa from central differences\n";
+  EXPECT_GT(largest_entry, 1e6);  // the soil's stiffness order (E 20 MPa)
+  EXPECT_LT(tangent_error, 1e-5 * largest_entry);
+}
+
+// |a(d) + a(-d)| / (|a(d)| + |a(-d)|), averaged over the steps of the simple shear at 30 kPa past
+// yield (its second half): 0 where a step and its reverse are answered alike but for the sign, 1
+// where one of them is not answered at all. For the soil, a(d) is the recorded (plastic) step and
+// a(-d) the elastic answer to its reverse, lambda tr(d) I + mu d (engineering shears); for each
+// surrogate, its answers to a thousandth of the step and of its reverse, each (with
+// `after_a_step_alike`) after a step of its own direction: going on, and going back after a step
+// back.
+struct StepAndReverse {
+  double soil = 0;
+  std::vector<double> surrogates;
+  int steps = 0;
+};
+
+StepAndReverse UnlikeStepAndReverse(const std::vector<const StressSurrogate*>& surrogates,
+                                    bool after_a_step_alike) {
+  const StrainHistory shear = Path(LabPath::kSimpleShear, 30e3, 0.04);
+  const std::vector<SurrogateInput> shear_inputs = InputsOf(shear);
+  const double young = 20e6, poisson = 0.3;
+  const double lambda = young * poisson / ((1 + poisson) * (1 - 2 * poisson));
+  const double mu = young / (2 * (1 + poisson));
+  const auto unlike = [](const Vector6& on, const Vector6& back) {
+    return (on + back).norm() / (on.norm() + back.norm());
+  };
+  StepAndReverse sums;
+  sums.surrogates.assign(surrogates.size(), 0.0);
+  for (std::size_t k = shear_inputs.size() / 2; k < shear_inputs.size(); ++k) {
+    const Vector6 d = shear_inputs[k].strain_increment;
+    Vector6 elastic_back = -mu * d;
+    elastic_back.head(3) =
+        -(lambda * d.head(3).sum() * Vector6::Ones().head(3) + 2 * mu * d.head(3));
+    const Matrix3 rotation = material::HughesWinget(shear.increments[k]).rotation;
+    const Vector6 recorded_on =
+        shear.stresses_pa[k] -
+        material::StressToVoigt(rotation * material::VoigtToStress(shear_inputs[k].stress_pa) *
+                                rotation.transpose());
+    sums.soil += unlike(recorded_on, elastic_back);
+    SurrogateInput on = shear_inputs[k], back = shear_inputs[k];
+    on.strain_increment *= 1e-3;
+    back.strain_increment *= -1e-3;
+    if (after_a_step_alike) {
+      on.previous_direction = IncrementDirection(d);
+      back.previous_direction = -IncrementDirection(d);
+    }
+    for (std::size_t m = 0; m < surrogates.size(); ++m) {
+      sums.surrogates[m] += unlike(surrogates[m]->StressIncrements({on})[0],
+                                   surrogates[m]->StressIncrements({back})[0]);
+    }
+    ++sums.steps;
+  }
+  sums.soil /= sums.steps;
+  for (double& sum : sums.surrogates) sum /= sums.steps;
+  return sums;
+}
+
 // MlpArchitecture::homogeneous_term (the hybrid). A smooth network answers an increment far
 // smaller than its training steps linearly: a step and its reverse alike but for the sign. Past
 // yield the soil does not (a step on loads plastically, its reverse unloads elastically), and the
@@ -698,57 +763,19 @@ TEST(StressSurrogate, AHybridAnswersATinyStepAndItsReverseUnlikeEachOther) {
   }
   const std::vector<SurrogateInput> inputs = InputsOf(Path(LabPath::kRandomWalk, 30e3, 0.004, 7));
   ExpectFusedEqualsModuleAndNothingAtRest(hybrid, inputs);
-  double largest_entry = 0;
-  const double tangent_error = LargestTangentError(hybrid, inputs, &largest_entry);
-  std::cout << "  hybrid tangent: largest entry " << largest_entry << " Pa, " << tangent_error
-            << " Pa from central differences\n";
-  EXPECT_GT(largest_entry, 1e6);
-  EXPECT_LT(tangent_error, 1e-5 * largest_entry);
+  ExpectTangentIsItsDerivative(hybrid, inputs);
 
-  // A step on and its reverse past yield: the shear at 30 kPa, its second half. The soil's own
-  // answers: the recorded (plastic) step, and the elastic answer to its reverse, lambda tr(d) I +
-  // mu d (engineering shears).
-  const StrainHistory shear = Path(LabPath::kSimpleShear, 30e3, 0.04);
-  const std::vector<SurrogateInput> shear_inputs = InputsOf(shear);
-  const double young = 20e6, poisson = 0.3;
-  const double lambda = young * poisson / ((1 + poisson) * (1 - 2 * poisson));
-  const double mu = young / (2 * (1 + poisson));
-  const auto unlike = [](const Vector6& on, const Vector6& back) {
-    return (on + back).norm() / (on.norm() + back.norm());
-  };
-  double soil_sum = 0, smooth_sum = 0, hybrid_sum = 0;
-  int steps = 0;
-  for (std::size_t k = shear_inputs.size() / 2; k < shear_inputs.size(); ++k) {
-    const Vector6 d = shear_inputs[k].strain_increment;
-    Vector6 elastic_back = -mu * d;
-    elastic_back.head(3) =
-        -(lambda * d.head(3).sum() * Vector6::Ones().head(3) + 2 * mu * d.head(3));
-    const Matrix3 rotation = material::HughesWinget(shear.increments[k]).rotation;
-    const Vector6 recorded_on =
-        shear.stresses_pa[k] -
-        material::StressToVoigt(rotation * material::VoigtToStress(shear_inputs[k].stress_pa) *
-                                rotation.transpose());
-    soil_sum += unlike(recorded_on, elastic_back);
-    for (auto [surrogate, sum] :
-         {std::pair{&smooth, &smooth_sum}, std::pair{&hybrid, &hybrid_sum}}) {
-      SurrogateInput on = shear_inputs[k], back = shear_inputs[k];
-      on.strain_increment *= 1e-3;
-      back.strain_increment *= -1e-3;
-      *sum += unlike(surrogate->StressIncrements({on})[0], surrogate->StressIncrements({back})[0]);
-    }
-    ++steps;
-  }
-  std::cout
-      << "  a thousandth of a shear step past yield and its reverse, |a(d) + a(-d)| / (|a(d)| + "
-         "|a(-d)|): "
-      << "soil " << soil_sum / steps << ", smooth " << smooth_sum / steps << ", hybrid "
-      << hybrid_sum / steps << " (mean over " << steps << " steps)\n";
+  const StepAndReverse unlike = UnlikeStepAndReverse({&smooth, &hybrid}, false);
+  std::cout << "  a thousandth of a shear step past yield and its reverse, |a(d) + a(-d)| / "
+               "(|a(d)| + |a(-d)|): soil "
+            << unlike.soil << ", smooth " << unlike.surrogates[0] << ", hybrid "
+            << unlike.surrogates[1] << " (mean over " << unlike.steps << " steps)\n";
   // 0: a step and its reverse answered alike but for the sign; 1: one of them not at all. The soil
   // flows past yield at nearly constant stress and unloads elastically (measured: 0.99); the smooth
   // network is linear there (0.0009), the hybrid halfway (0.47).
-  EXPECT_GT(soil_sum / steps, 0.9);
-  EXPECT_LT(smooth_sum / steps, 0.01);
-  EXPECT_GT(hybrid_sum / steps, 0.3);
+  EXPECT_GT(unlike.soil, 0.9);
+  EXPECT_LT(unlike.surrogates[0], 0.01);
+  EXPECT_GT(unlike.surrogates[1], 0.3);
 
   // Saved and loaded, in C++ and in Python's torch: the same answers to the raw inputs.
   ExpectSavedAndLoadedAlikeInCppAndPython(hybrid, inputs, "gonogo_hybrid");
@@ -799,57 +826,18 @@ TEST(StressSurrogate, APreviousDirectionNetworkAnswersGoingOnAndGoingBackUnlike)
   EXPECT_EQ(inputs[0].previous_direction, Vector6::Zero());
   EXPECT_EQ(inputs[5].previous_direction, IncrementDirection(inputs[4].strain_increment));
   ExpectFusedEqualsModuleAndNothingAtRest(directed, inputs);
-  double largest_entry = 0;
-  const double tangent_error = LargestTangentError(directed, inputs, &largest_entry);
-  std::cout << "  previous-direction tangent: largest entry " << largest_entry << " Pa, "
-            << tangent_error << " Pa from central differences\n";
-  EXPECT_GT(largest_entry, 1e6);
-  EXPECT_LT(tangent_error, 1e-5 * largest_entry);
+  ExpectTangentIsItsDerivative(directed, inputs);
 
-  // Along the shear at 30 kPa past yield (its second half), a thousandth of each step going on
-  // after a step on, and going back after a step back. The soil's own answers: the recorded
-  // (plastic) step, and the elastic answer to its reverse (as in the hybrid's test).
-  const StrainHistory shear = Path(LabPath::kSimpleShear, 30e3, 0.04);
-  const std::vector<SurrogateInput> shear_inputs = InputsOf(shear);
-  const double young = 20e6, poisson = 0.3;
-  const double lambda = young * poisson / ((1 + poisson) * (1 - 2 * poisson));
-  const double mu = young / (2 * (1 + poisson));
-  const auto unlike = [](const Vector6& on, const Vector6& back) {
-    return (on + back).norm() / (on.norm() + back.norm());
-  };
-  double soil_sum = 0, smooth_sum = 0, directed_sum = 0;
-  int steps = 0;
-  for (std::size_t k = shear_inputs.size() / 2; k < shear_inputs.size(); ++k) {
-    const Vector6 d = shear_inputs[k].strain_increment;
-    Vector6 elastic_back = -mu * d;
-    elastic_back.head(3) =
-        -(lambda * d.head(3).sum() * Vector6::Ones().head(3) + 2 * mu * d.head(3));
-    const Matrix3 rotation = material::HughesWinget(shear.increments[k]).rotation;
-    const Vector6 recorded_on =
-        shear.stresses_pa[k] -
-        material::StressToVoigt(rotation * material::VoigtToStress(shear_inputs[k].stress_pa) *
-                                rotation.transpose());
-    soil_sum += unlike(recorded_on, elastic_back);
-    for (auto [surrogate, sum] :
-         {std::pair{&smooth, &smooth_sum}, std::pair{&directed, &directed_sum}}) {
-      SurrogateInput on = shear_inputs[k], back = shear_inputs[k];
-      on.strain_increment *= 1e-3;
-      on.previous_direction = IncrementDirection(d);
-      back.strain_increment *= -1e-3;
-      back.previous_direction = -IncrementDirection(d);
-      *sum += unlike(surrogate->StressIncrements({on})[0], surrogate->StressIncrements({back})[0]);
-    }
-    ++steps;
-  }
+  const StepAndReverse unlike = UnlikeStepAndReverse({&smooth, &directed}, true);
   std::cout << "  a thousandth of a shear step past yield going on after a step on, and going back "
                "after a step back, |a(d) + a(-d)| / (|a(d)| + |a(-d)|): soil "
-            << soil_sum / steps << ", smooth " << smooth_sum / steps << ", previous direction "
-            << directed_sum / steps << " (mean over " << steps << " steps)\n";
+            << unlike.soil << ", smooth " << unlike.surrogates[0] << ", previous direction "
+            << unlike.surrogates[1] << " (mean over " << unlike.steps << " steps)\n";
   // 0: the two answered alike but for the sign; the soil 0.99, the smooth network 0.0009, the
   // network that sees the previous direction 0.42 (measured; the hybrid 0.47).
-  EXPECT_GT(soil_sum / steps, 0.9);
-  EXPECT_LT(smooth_sum / steps, 0.01);
-  EXPECT_GT(directed_sum / steps, 0.3);
+  EXPECT_GT(unlike.soil, 0.9);
+  EXPECT_LT(unlike.surrogates[0], 0.01);
+  EXPECT_GT(unlike.surrogates[1], 0.3);
 
   // Saved and loaded, in C++ and in Python's torch: the same answers to the raw inputs, the
   // direction read; fine-tuned, it still reads it; and it trains with the rollout term (whose

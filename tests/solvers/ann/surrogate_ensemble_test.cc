@@ -571,11 +571,6 @@ TEST(AnnMaterial, RecordsEachFallenBackPointsPathOnTheRealModel) {
   EXPECT_THROW(AnnMaterial(SharedEnsemble(), nullptr, nothing_to_record), InputError);
 }
 
-// An ensemble that carries an internal variable (Drucker-Prager's equivalent plastic strain):
-// its envelope covers the carried input, it saves and loads whole, and the ANN material takes the
-// variable from the real model's state a point starts from and carries it step by step, close to
-// the soil's along a shear past yield; a state saves and restores with it. Without a reader of the
-// real state, or with one that does not read the variable, the material is refused by name.
 // MlpArchitecture::previous_direction at the seam: the material gives the network each point's
 // last increment's direction (zero before the first), so a point driven along a shear answers as
 // the ensemble replays the shear with the directions (to rounding), and not as it would with none.
@@ -621,6 +616,11 @@ TEST(AnnMaterial, GivesANetworkThatReadsItThePointsPreviousDirection) {
   EXPECT_GT(off_without, 1e-3 * largest);
 }
 
+// An ensemble that carries an internal variable (Drucker-Prager's equivalent plastic strain):
+// its envelope covers the carried input, it saves and loads whole, and the ANN material takes the
+// variable from the real model's state a point starts from and carries it step by step, close to
+// the soil's along a shear past yield; a state saves and restores with it. Without a reader of the
+// real state, or with one that does not read the variable, the material is refused by name.
 TEST(AnnMaterial, CarriesTheEnsemblesInternalVariableFromTheRealModelsState) {
   const InternalVariables plastic = testing::PlasticStrain();
   TrainingOptions options;
