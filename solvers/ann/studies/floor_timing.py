@@ -7,10 +7,10 @@ pressed (the network answers loading well) might be left to the network until it
 curve's fallback paths as `gonogo dataset export DATASET --format npy` wrote them (each the RVE's
 answer to a fallen-back point's whole history; with --named TEXT only the paths whose name in
 DATASET.paths.csv holds TEXT, e.g. one curve's "of 66,") and takes those whose first stress is below
-FLOOR_KPA, the points a floor flags at their first step. For each it finds the first step at which such a
-gate would flag it:
+FLOOR_KPA, the points a floor flags at their first step. For each it finds the first step at which
+such a gate would flag it:
 
-  - p falling: p below the floor and its trend over 31 steps falling (step_stiffness.py's trend);
+  - p falling: p below the floor and its trend falling (step_stiffness.pressure_trend);
   - q released: p below the floor and the deviatoric stress q more than RELEASE_KPA below its
     largest so far (the shear unloading a network answers too softly, rig point 2).
 
@@ -22,10 +22,13 @@ steps as one flagged at its first: only the points a gate never flags are saved.
 """
 import argparse
 import csv
+import os
+import sys
 
 import numpy as np
 
-TREND_STEPS = 31
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from step_stiffness import pressure_trend  # noqa: E402
 
 
 def first(mask):
@@ -53,17 +56,20 @@ def main():
             continue
         deviator = stress[:, :3] - stress[:, :3].mean(1, keepdims=True)
         q = np.sqrt(1.5 * ((deviator ** 2).sum(1) + 2 * (stress[:, 3:] ** 2).sum(1)))
-        trend = np.convolve(p, np.ones(TREND_STEPS) / TREND_STEPS, mode='same')
         below = p < floor_pa
-        falling.append(first(below & (np.gradient(trend) < 0)))
+        falling.append(first(below & (np.gradient(pressure_trend(stress)) < 0)))
         released.append(first(below & (np.maximum.accumulate(q) - q > release_pa)))
         steps.append(len(p))
-    print(f'{len(steps)} paths start below {floor_pa / 1e3:g} kPa ({min(steps)}-{max(steps)} steps)')
-    for name, flagged in (('p falling', falling), (f'q released by {release_pa / 1e3:g} kPa', released)):
+    print(f'{len(steps)} paths start below {floor_pa / 1e3:g} kPa '
+          f'({min(steps)}-{max(steps)} steps)')
+    for name, flagged in (('p falling', falling),
+                          (f'q released by {release_pa / 1e3:g} kPa', released)):
         at = np.array([s for s in flagged if s is not None])
-        print(f'  {name}: {len(at)} flagged, at steps {np.percentile(at, 0):.0f} / '
-              f'{np.median(at):.0f} / {np.percentile(at, 100):.0f} (min / median / max); '
-              f'{len(flagged) - len(at)} never' if len(at) else f'  {name}: none flagged')
+        if len(at) == 0:
+            print(f'  {name}: none flagged')
+            continue
+        print(f'  {name}: {len(at)} flagged, at steps {at.min()} / {np.median(at):.0f} / '
+              f'{at.max()} (min / median / max); {len(flagged) - len(at)} never')
 
 
 if __name__ == '__main__':

@@ -26,6 +26,14 @@ from trajectory_spread import RIG_ROWS, histories, kinematics, tensors, voigts  
 TREND_STEPS = 31
 
 
+def pressure_trend(stresses):
+    """The mean stress p (compression positive) of (n, 6) Voigt stresses averaged over TREND_STEPS
+    steps: its slope, not each step's sign, says loading or unloading, as the RVE's p jitters step
+    to step."""
+    p = -stresses[:, :3].sum(1) / 3
+    return np.convolve(p, np.ones(TREND_STEPS) / TREND_STEPS, mode='same')
+
+
 def rig_paths(directory, columns, carried):
     """(role, index, rows) of DIR's rig histories, training ones first."""
     paths = []
@@ -43,9 +51,7 @@ def step_inputs(rows, carried_columns):
     inputs = np.hstack([increments, recorded[:-1], accumulated, rows[:-1, carried_columns]])
     turned = voigts(rotations @ tensors(recorded[:-1]) @ np.transpose(rotations, (0, 2, 1)))
     answers = recorded[1:] - turned
-    # The trend of p over 31 steps, not each step's sign: the RVE's p jitters step to step.
-    p = np.convolve(-recorded[:, :3].sum(1) / 3, np.ones(TREND_STEPS) / TREND_STEPS, mode='same')
-    return inputs, answers, np.gradient(p)[:-1] > 0
+    return inputs, answers, np.gradient(pressure_trend(recorded))[:-1] > 0
 
 
 def main():
