@@ -46,10 +46,11 @@ Vector6 StrainIncrementOf(const Matrix3& increment) {
 }
 
 // The direction of the last increment the point took (SurrogateInput::previous_direction): zero
-// before its first, as at a training path's first step.
-Vector6 PreviousDirectionOf(const AnnState& committed) {
-  return committed.history ? IncrementDirection(StrainIncrementOf(committed.history->increment))
-                           : Vector6::Zero();
+// before its first, as at a training path's first step, and zero for a network that does not
+// read it (a second strain split per point it would not use).
+Vector6 PreviousDirectionOf(const AnnState& committed, const SurrogateEnsemble& ensemble) {
+  if (!committed.history || !ensemble.reads_previous_direction()) return Vector6::Zero();
+  return IncrementDirection(StrainIncrementOf(committed.history->increment));
 }
 
 material::PointResponse Failed(const std::string& reason) {
@@ -378,7 +379,7 @@ std::vector<bool> AnnMaterial::WouldFlag(const std::vector<material::PointIncrem
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
     input.internal_variables = CarriedOf(RealStateOf(*committed.fallback));
-    input.previous_direction = PreviousDirectionOf(committed);
+    input.previous_direction = PreviousDirectionOf(committed, *ensemble_);
     inputs.push_back(input);
     asked.push_back(k);
   }
@@ -410,7 +411,7 @@ std::vector<material::PointResponse> AnnMaterial::Update(
     input.stress_pa = material::StressToVoigt(committed.stress_pa);
     input.accumulated_strain = committed.accumulated_strain;
     input.internal_variables = committed.internal_variables;
-    input.previous_direction = PreviousDirectionOf(committed);
+    input.previous_direction = PreviousDirectionOf(committed, *ensemble_);
     on_network.push_back(i);
     inputs.push_back(input);
     kinematics.push_back(std::move(split));

@@ -137,6 +137,8 @@ class SurrogateEnsemble {
   const std::vector<std::string>& carried_variables() const {
     return members_.front().carried_variables();
   }
+  // Whether the members read SurrogateInput::previous_direction (one architecture for all).
+  bool reads_previous_direction() const { return members_.front().reads_previous_direction(); }
 
   // A directory: member_<k>.pt (TorchScript, each loadable alone) and envelope.bin (the envelope
   // and thresholds, tagged little-endian doubles; GNGENV02, and GNGENV01 read with no cap). Load throws InputError("model", ...) for a

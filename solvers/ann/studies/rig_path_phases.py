@@ -22,7 +22,6 @@ the stress (each step only turns it): what a network that answered nothing would
 
     python3 solvers/ann/studies/rig_path_phases.py MODEL DIR [EVERY]
 """
-import glob
 import os
 import sys
 
@@ -30,7 +29,8 @@ import numpy as np
 import torch
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from trajectory_spread import RIG_ROWS, Admissible, histories, kinematics, tensors, voigts  # noqa: E402
+from trajectory_spread import (RIG_ROWS, Admissible, histories, kinematics, load_members,  # noqa: E402
+                               tensors, voigts)
 
 
 def mean_and_deviatoric(voigt):
@@ -47,8 +47,7 @@ def main():
     model, directory = sys.argv[1:3]
     every = int(sys.argv[3]) if len(sys.argv) == 4 else 60
     torch.set_num_threads(2)
-    members = [torch.jit.load(f) for f in sorted(glob.glob(f'{model}/member_*.pt'))]
-    carried = [n for n in members[0].carried_variables.split(',') if n]
+    members, carried = load_members(model)
     training = np.load(f'{directory}/training.npy')
     columns = open(f'{directory}/training.npy.columns.txt').read().split()
     carried_columns = [columns.index(n) for n in carried]

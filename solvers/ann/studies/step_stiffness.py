@@ -12,7 +12,6 @@ the RVE, below 1: softer), the share of the RVE's |d_sigma| along its own direct
 model gives (sum of a . r / |r| over sum of |r|), and the one-step error, sum |a - r| / sum |r|.
     python3 solvers/ann/studies/step_stiffness.py DIR MODEL [MODEL ...]
 """
-import glob
 import os
 import sys
 
@@ -20,7 +19,8 @@ import numpy as np
 import torch
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from trajectory_spread import RIG_ROWS, histories, kinematics, tensors, voigts  # noqa: E402
+from trajectory_spread import (RIG_ROWS, histories, kinematics, load_members,  # noqa: E402
+                               tensors, voigts)
 
 
 TREND_STEPS = 31
@@ -60,11 +60,10 @@ def main():
     directory, models = sys.argv[1], sys.argv[2:]
     torch.set_num_threads(2)
     columns = open(f'{directory}/training.npy.columns.txt').read().split()
-    ensembles = []
-    for model in models:
-        members = [torch.jit.load(f) for f in sorted(glob.glob(f'{model}/member_*.pt'))]
-        ensembles.append((os.path.basename(model.rstrip('/')), members))
-    carried = [n for n in ensembles[0][1][0].carried_variables.split(',') if n]
+    loaded = [load_members(model) for model in models]
+    ensembles = [(os.path.basename(model.rstrip('/')), members)
+                 for model, (members, _) in zip(models, loaded)]
+    carried = loaded[0][1]
     carried_columns = [columns.index(n) for n in carried]
     print(f'{len(ensembles)} models carrying {carried or "nothing"}; per path, loading / unloading '
           'steps: model |d_sigma| over the RVE\'s, the share along the RVE\'s, one-step error')

@@ -95,13 +95,25 @@ class Admissible:
                       np.swapaxes(vectors, -1, -2))
 
 
+def load_members(model):
+    """The TorchScript members of the saved ensemble MODEL, and the variables they carry. These
+    studies give a member the 18 + V smooth inputs; a network that also reads the previous step's
+    direction (its attribute previous_direction) is refused, by name."""
+    members = [torch.jit.load(f) for f in sorted(glob.glob(f'{model}/member_*.pt'))]
+    if not members:
+        sys.exit(f'{model}: no member_<k>.pt')
+    if getattr(members[0], 'previous_direction', False):
+        sys.exit(f'{model}: reads the previous step\'s direction (previous_direction), '
+                 'six inputs this study does not build')
+    return members, [n for n in members[0].carried_variables.split(',') if n]
+
+
 def main():
     if len(sys.argv) != 4:
         sys.exit(__doc__)
     model, training_file, directory = sys.argv[1:]
     torch.set_num_threads(2)
-    members = [torch.jit.load(f) for f in sorted(glob.glob(f'{model}/member_*.pt'))]
-    carried = [n for n in members[0].carried_variables.split(',') if n]
+    members, carried = load_members(model)
     training = np.load(training_file)
     columns = open(f'{training_file}.columns.txt').read().split()
     carried_columns = [columns.index(n) for n in carried]
