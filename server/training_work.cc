@@ -113,7 +113,7 @@ std::string RunRigPaths(const v1::RigPathsWork& work, const ComputeContext& cont
   }
   for (const ann::StrainHistory& path :
        tiers::EvenlySpread(recorded.paths, work.held_out_points(),
-                           RigHeldOutOffset(count, work.training_points()))) {
+                           tiers::RigHeldOutOffset(count, work.training_points()))) {
     output.add_held_out(ann::SerializeHistory(path));
   }
   return output.SerializeAsString();
@@ -131,10 +131,6 @@ std::string RunReplayPath(const v1::ReplayPathWork& work, const ComputeContext& 
 }
 
 }  // namespace
-
-int RigHeldOutOffset(int paths, int training_points) {
-  return paths / (2 * std::max(1, training_points)) + 1;
-}
 
 std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& context) {
   switch (work.work_case()) {

@@ -23,8 +23,5 @@ std::string RunTrainingWork(const v1::TrainingWork& work, const ComputeContext& 
 
 v1::RvePathWork ToProto(const ann::LabPathSpec& spec);
 ann::LabPathSpec LabPathSpecOf(const v1::RvePathWork& work);
-// The recorded paths a RigPathsWork keeps of a run with `paths` points: training first, then the
-// held-out ones between them (tiers::EvenlySpread).
-int RigHeldOutOffset(int paths, int training_points);
 
 }  // namespace gonogo::server

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +27,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -420,19 +422,41 @@ void ReportEnsemble(const StudyCommandLine& line, Study& study, const SurrogateE
 // The paths of an fe-de rig run at --rig-load-n (seed 000's step 2) added to the study:
 // --rig-points of them, evenly spread over the bin, to its training and half as many others to its
 // held-out paths, each with its floor (the path replayed from its initial stress on each of
-// --packing-seeds); the run's curve becomes the study's fe-de reference at that load.
+// --packing-seeds); the run's curve becomes the study's fe-de reference at that load. With
+// --rig-held-out-as N the held-out paths are those of N training points, and the training points
+// are spread over the rest.
 void AddRigPaths(const StudyCommandLine& line, const tiers::FeDeOptions& preset,
                  const InternalVariables& internal, Study& study) {
   const auto start = std::chrono::steady_clock::now();
   const tiers::RecordedRigRun recorded = tiers::RecordRigPaths(
       tiers::FeDeTier(preset), RigRequest(line, line.rig_load_n), {}, internal);
   study.references[line.rig_load_n] = {recorded.run, Since(start)};
-  const std::vector<StrainHistory> rig_training =
-      tiers::EvenlySpread(recorded.paths, line.rig_points, 0);
-  const int rig_held_out = std::max(1, line.rig_points / 2);
-  const std::vector<StrainHistory> rig_checks = tiers::EvenlySpread(
-      recorded.paths, rig_held_out,
-      static_cast<int>(recorded.paths.size() / (2 * std::max(1, line.rig_points))) + 1);
+  const std::size_t paths = recorded.paths.size();
+  const int held_out_as = line.rig_held_out_as > 0 ? line.rig_held_out_as : line.rig_points;
+  const std::vector<std::size_t> held_out =
+      tiers::EvenlySpreadIndices(paths, std::max(1, held_out_as / 2),
+                                 tiers::RigHeldOutOffset(static_cast<int>(paths), held_out_as));
+  std::vector<std::size_t> trainable(paths);
+  std::iota(trainable.begin(), trainable.end(), std::size_t{0});
+  if (line.rig_held_out_as > 0) {
+    trainable.erase(std::remove_if(trainable.begin(), trainable.end(),
+                                   [&](std::size_t index) {
+                                     return std::find(held_out.begin(), held_out.end(), index) !=
+                                            held_out.end();
+                                   }),
+                    trainable.end());
+  }
+  std::vector<StrainHistory> rig_training, rig_checks;
+  std::string indices = "training";
+  for (std::size_t k : tiers::EvenlySpreadIndices(trainable.size(), line.rig_points, 0)) {
+    rig_training.push_back(recorded.paths[trainable[k]]);
+    indices += " " + std::to_string(trainable[k]);
+  }
+  indices += ", held out";
+  for (std::size_t index : held_out) {
+    rig_checks.push_back(recorded.paths[index]);
+    indices += " " + std::to_string(index);
+  }
   study.training.insert(study.training.end(), rig_training.begin(), rig_training.end());
   for (std::size_t k = 0; k < rig_checks.size(); ++k) {
     study.held_out.push_back(rig_checks[k]);
@@ -456,9 +480,9 @@ void AddRigPaths(const StudyCommandLine& line, const tiers::FeDeOptions& preset,
   }
   std::printf(
       "# rig run at %.0f N (fe-de, %s): %d elements, %d FE steps, %.1f s; %zu points' "
-      "paths recorded, %zu in training, %zu held out\n",
+      "paths recorded, %zu in training, %zu held out (the points' indices: %s)\n",
       line.rig_load_n, line.preset.c_str(), recorded.run.elements, recorded.run.fe_steps,
-      Since(start), recorded.paths.size(), rig_training.size(), rig_checks.size());
+      Since(start), recorded.paths.size(), rig_training.size(), rig_checks.size(), indices.c_str());
 }
 
 // The study's data: the recipe's laboratory paths on the soil's RVE (training and held out), with
@@ -541,6 +565,10 @@ int Run(const StudyCommandLine& line) {
   }
   if (line.rig_weight != 1 && line.rig_load_n <= 0) {
     throw InputError("--rig-weight", "weighs the rig's recorded paths: give --rig-load-n too");
+  }
+  if (line.rig_held_out_as > 0 && line.rig_load_n <= 0) {
+    throw InputError("--rig-held-out-as",
+                     "chooses among the rig's recorded paths: give --rig-load-n too");
   }
   tiers::RveVariables(line.carried, "--carry");  // refused before any path runs
   std::optional<SurrogateEnsemble> from;         // loaded before any path runs

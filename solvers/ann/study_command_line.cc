@@ -51,6 +51,11 @@ void AddStudyOptions(CLI::App& app, StudyCommandLine& line) {
                  "recorded points in the training set (half as many others held out)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  app.add_option("--rig-held-out-as", line.rig_held_out_as,
+                 "hold out the recorded points that --rig-points of this many holds out, and "
+                 "spread the training points over the others: recipes with more or fewer training "
+                 "points checked on the same held-out paths (default: --rig-points itself)")
+      ->check(CLI::Range(1, 100000));
   app.add_flag("--record-fabric", line.record_fabric,
                "the histories --out writes also record, per step, the RVE's coordination number, "
                "solid fraction and contact fabric (fabric_xx ... fabric_xy; trace 1): for "

@@ -26,6 +26,7 @@ struct StudyCommandLine {
   double rig_diameter_m = 0.5;
   double rig_width_m = 0.2;
   int rig_points = 16;
+  int rig_held_out_as = 0;  // > 0: hold out the rig points --rig-points of this many would
   std::vector<double> validate_loads_n;
   // --validate-load-n's runs at each of these multiples of the model's spread threshold.
   std::vector<double> validate_spread_scales = {1.0};

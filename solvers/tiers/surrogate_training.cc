@@ -300,17 +300,28 @@ double PackingFloor(const std::vector<PackingDifference>& packings) {
                                      : 0.5 * (differences[middle - 1] + differences[middle]);
 }
 
+std::vector<std::size_t> EvenlySpreadIndices(std::size_t size, int count, int offset) {
+  Require(count >= 0, "count", "must be >= 0");
+  std::vector<std::size_t> chosen;
+  if (size == 0 || count == 0) return chosen;
+  const double stride = static_cast<double>(size) / count;
+  for (int k = 0; k < count; ++k) {
+    chosen.push_back(static_cast<std::size_t>(offset + k * stride) % size);
+  }
+  return chosen;
+}
+
 std::vector<ann::StrainHistory> EvenlySpread(const std::vector<ann::StrainHistory>& paths,
                                              int count, int offset) {
-  Require(count >= 0, "count", "must be >= 0");
   std::vector<ann::StrainHistory> chosen;
-  if (paths.empty() || count == 0) return chosen;
-  const double stride = static_cast<double>(paths.size()) / count;
-  for (int k = 0; k < count; ++k) {
-    const auto index = static_cast<std::size_t>(offset + k * stride) % paths.size();
+  for (std::size_t index : EvenlySpreadIndices(paths.size(), count, offset)) {
     chosen.push_back(paths[index]);
   }
   return chosen;
+}
+
+int RigHeldOutOffset(int paths, int training_points) {
+  return paths / (2 * std::max(1, training_points)) + 1;
 }
 
 TrainedSurrogate TrainSurrogateOnRve(

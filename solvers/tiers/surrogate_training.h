@@ -180,6 +180,13 @@ std::string HistoriesHash(const std::vector<ann::StrainHistory>& histories);
 // `count` of `paths`, evenly spread over them from index `offset` (every size / count-th).
 std::vector<ann::StrainHistory> EvenlySpread(const std::vector<ann::StrainHistory>& paths,
                                              int count, int offset = 0);
+// The indices EvenlySpread picks among `size` paths.
+std::vector<std::size_t> EvenlySpreadIndices(std::size_t size, int count, int offset = 0);
+
+// Where the held-out rig paths start among a rig run's `paths` recorded points when
+// `training_points` of them train (EvenlySpread from 0): half a training stride on, and one more,
+// so that each held-out path lies between two training ones.
+int RigHeldOutOffset(int paths, int training_points);
 
 // The recipe on `soil`'s RVE at the RVE numerics of `fe_de`. `stage` (if set) hears "paths",
 // "training" and each done fraction.

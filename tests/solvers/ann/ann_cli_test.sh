@@ -5,11 +5,12 @@
 # provenance, the fine-tuned one naming its base. The first run records the RVE's fabric
 # (--record-fabric): the exported columns carry it, of trace 1 at every step with contacts. A
 # network carrying the coordination number (--carry) is trained; what cannot be carried is refused
-# by name, as is --rig-weight without the rig's paths. The RVE's own spread (--packing-seeds): the
-# study's packing (seed 1) against itself is 0 on every held-out path, another packing is not. The
-# studies of the RVE alone: at rest (--rest-kpa) its stress is printed every tenth zero increment,
-# and the increment-size study (--increment-kpa) prints p and q along each step count; an unknown
-# --increment-path is refused by name.
+# by name, as are --rig-weight and --rig-held-out-as without the rig's paths. With a rig run,
+# --rig-held-out-as holds out the paths of another training count, none of them in training. The
+# RVE's own spread (--packing-seeds): the study's packing (seed 1) against itself is 0 on every
+# held-out path, another packing is not. The studies of the RVE alone: at rest (--rest-kpa) its
+# stress is printed every tenth zero increment, and the increment-size study (--increment-kpa)
+# prints p and q along each step count; an unknown --increment-path is refused by name.
 set -eu
 ann="$1"
 out="$2"
@@ -74,6 +75,31 @@ if "$ann" --rig-weight 4 > /dev/null 2> "$out/error.txt"; then
   exit 1
 fi
 grep -q -- "--rig-weight: weighs the rig's recorded paths: give --rig-load-n too" "$out/error.txt"
+if "$ann" --rig-held-out-as 4 > /dev/null 2> "$out/error.txt"; then
+  echo "--rig-held-out-as without the rig's paths was accepted" >&2
+  exit 1
+fi
+grep -q -- "--rig-held-out-as: chooses among the rig's recorded paths: give --rig-load-n too" \
+  "$out/error.txt"
+# Eight of the rig's recorded paths in training, held out those of four (--rig-held-out-as):
+# the points four training points hold out, none of them in training.
+OMP_WAIT_POLICY=passive "$ann" --soil seed000_sand_rve100 --preset tiny --steps 5 --walks 0 \
+  --architecture 8 --epochs 1 --threads 1 --rig-load-n 1000 --rig-points 8 --rig-held-out-as 4 \
+  > "$out/rig.csv" 2> "$out/rig_progress.txt"
+/usr/bin/python3 - "$out/rig.csv" <<'PYTHON'
+import re, sys
+line = next(l for l in open(sys.argv[1]) if l.startswith('# rig run at 1000 N'))
+found = re.search(r"(\d+) points' paths recorded, 8 in training, 2 held out "
+                  r"\(the points' indices: training ([\d ]+), held out ([\d ]+)\)", line)
+assert found, line
+paths = int(found.group(1))
+training = [int(k) for k in found.group(2).split()]
+held_out = [int(k) for k in found.group(3).split()]
+# As --rig-points 4 holds out (EvenlySpread from RigHeldOutOffset): from paths / 8 + 1, every
+# paths / 2.
+assert held_out == [int(paths // 8 + 1 + k * paths / 2) % paths for k in range(2)], line
+assert len(set(training)) == 8 and not set(training) & set(held_out), line
+PYTHON
 if "$ann" --carry coordination_number --architecture gru8 > /dev/null 2> "$out/error.txt"; then
   echo "--carry with a GRU was accepted" >&2
   exit 1
