@@ -1,6 +1,7 @@
 // The fe-de tier for real under `mpirun -np 3` (CTest runs it so): the same curve, bit for bit,
-// computed alone on rank 0, on a group of 2 ranks and on a group of 3 with load balancing that
-// migrates RVEs mid-run and 2 threads on one rank; cancellation stops the whole group.
+// computed alone on rank 0 (on one thread, and on two over which its RVEs spread), on a group of 2
+// ranks and on a group of 3 with load balancing that migrates RVEs mid-run and 2 threads on one
+// rank; cancellation stops the whole group.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
@@ -73,8 +74,23 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   options.balance.cost_window_commits = 10;
   const FeDeTier tier(options);
 
-  TractionCurve alone;
-  if (rank == 0) alone = RunOn(tier, MPI_COMM_NULL, 1);
+  TractionCurve alone, alone_on_two_threads;
+  int alone_rve_threads = 0;
+  if (rank == 0) {
+    alone = RunOn(tier, MPI_COMM_NULL, 1);
+    // Alone on two threads: the RVEs themselves spread over them (the tier's RVE, handed to a
+    // stand-in that answers with it unchanged), to the same bits.
+    ComputeContext context;
+    context.threads = 2;
+    alone_on_two_threads = tier.RunWithStandIn(
+                                   Request(),
+                                   [&](std::shared_ptr<const dem::rve::RveMaterial> rve) {
+                                     alone_rve_threads = rve->params().batch_threads;
+                                     return PointStandIn{rve, {}};
+                                   },
+                                   context)
+                               .curve;
+  }
   MPI_Barrier(MPI_COMM_WORLD);
 
   MPI_Comm pair = MPI_COMM_NULL;
@@ -95,6 +111,8 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
   reference_curve = new TractionCurve(alone);
   EXPECT_TRUE(SameBits(on_two, alone));
   EXPECT_TRUE(SameBits(on_three, alone));
+  EXPECT_EQ(alone_rve_threads, 2);
+  EXPECT_TRUE(SameBits(alone_on_two_threads, alone));
   for (const TractionPoint& p : alone.points) {
     std::cout << "  s " << p.slip << " D " << p.drawbar_pull_n << " N, T " << p.torque_nm
               << " N m, z " << p.sinkage_m << " m\n";
