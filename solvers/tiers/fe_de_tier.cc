@@ -158,8 +158,10 @@ bool FeDeTier::RunOnBins(const SoilParameters& soil, const ComputeContext& conte
   const auto start = std::chrono::steady_clock::now();
   dem::rve::RveMaterialParams params =
       dem::rve::RveMaterialParamsFromSoil(soil, options_.numerics, "soil.parameters");
-  // The RVEs a rank answers itself (all of them when it runs alone) spread over its threads, one
-  // point to a thread at a time: each point's answer is its own, so the curve is the same.
+  // Alone, the one rank answers every RVE through the material's own batch, spread over its
+  // threads one point to a thread at a time: each point's answer is its own, so the curve is the
+  // same on any count. In a rank group this has no effect: bridge::UpdatePoints already spreads
+  // each rank's points over its threads, one point a call.
   params.batch_threads = std::max(1, context.threads);
   // Every rank builds the same template RVE (deterministic generation), so a point's state means
   // the same wherever it lives.
