@@ -98,16 +98,6 @@ void RequireGiven(const CLI::App& command, std::initializer_list<const char*> na
   }
 }
 
-void PrintSamples(const rig::RigRun& run) {
-  std::printf("time_s,phase,slip,forward_speed_m_s,angular_speed_rad_s,drawbar_pull_n,torque_nm,"
-              "vertical_force_n,sinkage_m\n");
-  for (const rig::RigSample& s : run.samples) {
-    std::printf("%.4f,%d,%.4f,%.4f,%.4f,%.2f,%.2f,%.2f,%.5f\n", s.time_s, s.phase, s.slip,
-                s.forward_speed_m_s, s.angular_speed_rad_s, s.drawbar_pull_n, s.torque_nm,
-                s.vertical_force_n, s.sinkage_m);
-  }
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -201,7 +191,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "\n%d elements, %d nodes, h = %.4f m, dt = %.3g s, %d steps, %.1f s\n",
                  run.elements, run.nodes, run.element_size_m, run.time_step_s, run.steps, seconds);
     if (line.samples || command == "constant-slip" || command == "towed") {
-      PrintSamples(run);
+      std::fputs(rig::RigSamplesCsv(run.samples).c_str(), stdout);
       return 0;
     }
     std::printf("slip,drawbar_pull_n,torque_nm,sinkage_m,tractive_efficiency\n");

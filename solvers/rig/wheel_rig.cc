@@ -2,18 +2,19 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <sstream>
-#include <cmath>
-#include <memory>
 #include <stdexcept>
 
 #include "solvers/common/byte_stream.h"
 #include "solvers/common/errors.h"
-#include "solvers/material/checkpoint_files.h"
 #include "solvers/common/units.h"
+#include "solvers/material/checkpoint_files.h"
 #include "solvers/rig/fe_soil_bin.h"
 
 namespace gonogo::rig {
@@ -488,6 +489,20 @@ std::vector<TractionPoint> CurveFromRun(const RigRun& run, const std::vector<dou
     points.push_back(p);
   }
   return points;
+}
+
+std::string RigSamplesCsv(const std::vector<RigSample>& samples) {
+  std::string text =
+      "time_s,phase,slip,forward_speed_m_s,angular_speed_rad_s,drawbar_pull_n,torque_nm,"
+      "vertical_force_n,sinkage_m\n";
+  char line[256];
+  for (const RigSample& s : samples) {
+    std::snprintf(line, sizeof line, "%.4f,%d,%.4f,%.4f,%.4f,%.2f,%.2f,%.2f,%.5f\n", s.time_s,
+                  s.phase, s.slip, s.forward_speed_m_s, s.angular_speed_rad_s, s.drawbar_pull_n,
+                  s.torque_nm, s.vertical_force_n, s.sinkage_m);
+    text += line;
+  }
+  return text;
 }
 
 }  // namespace gonogo::rig

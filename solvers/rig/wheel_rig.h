@@ -134,4 +134,9 @@ RigRun RunTowedTest(const FeSoil& soil, const RigWheel& wheel, double hold_s,
 std::vector<TractionPoint> CurveFromRun(const RigRun& run, const std::vector<double>& slips,
                                         double radius_m);
 
+// The records as CSV, a header line and then one line per record in SI units (time_s, phase, slip,
+// forward_speed_m_s, angular_speed_rad_s, drawbar_pull_n, torque_nm, vertical_force_n, sinkage_m):
+// `gonogo-rig drawbar --samples`, `gonogo-fe-de --samples-csv`.
+std::string RigSamplesCsv(const std::vector<RigSample>& samples);
+
 }  // namespace gonogo::rig

@@ -7,7 +7,7 @@
 //   gonogo-fe-de ... --checkpoint-dir DIR [--checkpoint-every-s 600] --curve-csv FILE
 //                (a curve of hours: checkpointed, the same command resumes it; the curve kept
 //                in FILE with the configuration it was run on, for gonogo-bench-fe-ann
-//                --fe-de-curve)
+//                --fe-de-curve); --samples-csv FILE keeps the rig's 5 ms records too
 //
 //   gonogo-fe-de --calibrate --soil seed000_sand_rve100 --wheel-diameter 0.5 ... --preset ci
 //                (RVE triaxials, the Drucker-Prager fit and its twin curve beside fe-de's)
@@ -17,10 +17,10 @@
 //                [--ring-pressures 10e3,40e3] (the RVE alone: triaxials, simple shears, and
 //                what a shear ring should read of them)
 //
-// Prints the curve (or the bevameter's curves and fit) as CSV (the columns of `gonogo curve --csv`) on stdout and the run's figures
-// (mesh, FE steps, ranks, wall time, load imbalance, migrations, bytes per step) on stderr; with
-// --balance-csv FILE, one row per FE step of the balance records. Exit status: 0 done, 1 failed,
-// 2 bad options.
+// Prints the curve (or the bevameter's curves and fit) as CSV (the columns of `gonogo curve --csv`)
+// on stdout and the run's figures (mesh, FE steps, ranks, wall time, load imbalance, migrations,
+// bytes per step) on stderr; with --balance-csv FILE, one row per FE step of the balance records.
+// Exit status: 0 done, 1 failed, 2 bad options.
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
@@ -68,6 +68,7 @@ struct CommandLine {
   std::string checkpoint_dir;  // empty: no checkpoints
   double checkpoint_every_s = 600;
   std::string curve_csv;  // empty: the curve on stdout only
+  std::string samples_csv;  // empty: the rig's records not kept
   bool bevameter = false;
   bool twin = false;
   bool calibrate = false;
@@ -379,6 +380,17 @@ int MeasurePace(const CommandLine& line, const tiers::FeDeTier& tier,
   return 0;
 }
 
+// Writes `text` to `path` through a temporary file, so that an interrupted run leaves no partial
+// file there; `option` names the path in the error.
+void WriteWhole(const std::string& path, const std::string& text, const char* option) {
+  const std::string temporary = path + ".tmp";
+  std::ofstream out(temporary);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error(std::string("could not write ") + option + " " + path);
+  std::filesystem::rename(temporary, path);
+}
+
 int Run(const CommandLine& line, int rank) {
   if (line.bevameter) return RunBevameter(line, rank);
   if (line.calibrate) return RunCalibration(line, rank);
@@ -405,13 +417,9 @@ int Run(const CommandLine& line, int rank) {
   file.configuration["wall_s_this_run"] = tiers::ConfigurationNumber(report.wall_seconds);
   const std::string text = tiers::FeDeCurveFileText(file);
   std::fputs(text.substr(text.find('\n') + 1).c_str(), stdout);  // the CSV, without the '#' line
-  if (!line.curve_csv.empty()) {
-    const std::string temporary = line.curve_csv + ".tmp";
-    std::ofstream out(temporary);
-    out << text;
-    out.close();
-    if (!out) throw std::runtime_error("could not write --curve-csv " + line.curve_csv);
-    std::filesystem::rename(temporary, line.curve_csv);
+  if (!line.curve_csv.empty()) WriteWhole(line.curve_csv, text, "--curve-csv");
+  if (!line.samples_csv.empty()) {
+    WriteWhole(line.samples_csv, rig::RigSamplesCsv(report.samples), "--samples-csv");
   }
   if (!report.curve.immobile_reason.empty()) {
     std::fprintf(stderr, "immobile: %s\n", report.curve.immobile_reason.c_str());
@@ -570,6 +578,11 @@ int main(int argc, char** argv) {
   app.add_option("--curve-csv", line.curve_csv,
                  "also write the curve here, its configuration on a first '#' line "
                  "(gonogo-bench-fe-ann --fe-de-curve reads it)")
+      ->excludes(calibrate, element_tests, bevameter, stop_after);
+  app.add_option("--samples-csv", line.samples_csv,
+                 "also write the rig's 5 ms records here (time, phase, slip, speeds, drawbar pull, "
+                 "torque, vertical force, sinkage; SI units): the curve is their mean over each "
+                 "slip's window")
       ->excludes(calibrate, element_tests, bevameter, stop_after);
   checkpoint_dir->excludes(calibrate, element_tests, bevameter, stop_after);
   CLI11_PARSE(app, argc, argv);

@@ -258,6 +258,7 @@ void FeDeTier::RollWheel(const TractionRequest& request, const rig::SoilBinFacto
     report->elements = run.elements;
     report->fe_steps = run.steps;
     report->fe_time_step_s = run.time_step_s;
+    report->samples = run.samples;
   } catch (const CannotCarryError& e) {
     curve.points.clear();
     curve.immobile_reason = e.what();

@@ -22,6 +22,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "solvers/bridge/distributed_point_store.h"
 #include "solvers/common/tier.h"
@@ -77,6 +78,9 @@ struct FeDeRunFigures {
 // One fe-de traction curve and its run.
 struct FeDeRunReport : FeDeRunFigures {
   TractionCurve curve;
+  // The rig's records the curve was filtered from (rig::RigRun::samples: the 5 ms means of drawbar
+  // pull, torque, vertical force and sinkage over the whole procedure); empty if the wheel sank.
+  std::vector<rig::RigSample> samples;
   int elements = 0;            // FE elements = RVEs (of the wheel's bin)
   int fe_steps = 0;
   double fe_time_step_s = 0;

@@ -6,7 +6,7 @@
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
 //                       [--progress-every-s 60] [--fe-ann-stop-at F]
 //                       [--refine-rounds N [--refine-epochs 100] [--refine-share F]
-//                       [--refine-stop-at F]]
+//                       [--refine-stop-at F]] [--samples-csv FILE]
 //
 // Trains a model by the fe-ann recipe (solvers/tiers/surrogate_training.h) on the soil's RVE at
 // the preset's numerics, then prints
@@ -32,19 +32,23 @@
 //     paths' steps carry the share F of the loss, else each step weighs alike), and the curve is
 //     run again on the fine-tuned model (to the same budget, or with --refine-stop-at F to that
 //     fraction of the FE steps, 0: to the end): its fallbacks, time and curve each round;
+//   - with --samples-csv FILE, the rig's 5 ms records of each whole fe-ann curve written there
+//     (the last one kept), to set beside gonogo-fe-de --samples-csv's;
 //   - peak resident memory after each part.
-#include <CLI/CLI.hpp>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -92,6 +96,7 @@ int main(int argc, char** argv) {
   double fe_ann_budget_s = 0, progress_every_s = 60, fe_ann_stop_at = 0;
   bool no_fe_de = false;
   std::string fe_de_curve_path;
+  std::string samples_csv;
   std::vector<std::string> carried;
   int return_after_steps = 0, refine_rounds = 0, refine_epochs = 100;
   double refine_share = 0, refine_stop_at = -1;
@@ -122,6 +127,11 @@ int main(int argc, char** argv) {
   app.add_option("--fe-de-curve", fe_de_curve_path,
                  "compare with this fe-de curve of the same rig (gonogo-fe-de --curve-csv, run "
                  "with --slip-step 0.25) instead of running fe-de");
+  app.add_option(
+      "--samples-csv", samples_csv,
+      "write each whole fe-ann curve's rig records (5 ms means; gonogo-fe-de "
+      "--samples-csv's columns) here, the last curve's kept: the fine-tuned model's when "
+      "refining");
   app.add_option("--fe-ann-budget-s", fe_ann_budget_s,
                  "> 0: stop the fe-ann curve after this long and print how far it came")
       ->capture_default_str();
@@ -339,6 +349,12 @@ int main(int argc, char** argv) {
         return fallback_paths;
       }
       const double ann_s = Since(run_start);
+      if (!samples_csv.empty()) {
+        std::ofstream out(samples_csv);
+        out << rig::RigSamplesCsv(ann.samples);
+        if (!out) throw std::runtime_error("could not write --samples-csv " + samples_csv);
+        std::printf("%s curve: its rig records in %s\n", label.c_str(), samples_csv.c_str());
+      }
       const double rest_s =
           ann_s - ann.network_seconds - ann.fallback_seconds - ann.model_load_seconds;
       char speedup[64] = "fe-de not run";

@@ -23,7 +23,8 @@ fail() {
 
 rig=(--preset tiny --soil seed000_sand_rve100 --wheel-diameter 0.5 --wheel-width 0.2
      --wheel-load 1000 --slip-step 0.25 --threads 2)
-kept=(--checkpoint-dir "$work/checkpoint" --checkpoint-every-s 1 --curve-csv "$work/curve.csv")
+kept=(--checkpoint-dir "$work/checkpoint" --checkpoint-every-s 1 --curve-csv "$work/curve.csv"
+      --samples-csv "$work/samples.csv")
 
 # 1. Started, stopped once a checkpoint exists and a few more seconds have passed.
 "$fe_de" "${rig[@]}" "${kept[@]}" > "$work/first.out" 2> "$work/first.err" &
@@ -51,14 +52,32 @@ fi
 grep -q "the checkpoint in $work/checkpoint is kept" "$work/resumed.err" ||
   fail "the resumed run does not say where its checkpoint is kept"
 
-# 3. An uninterrupted run answers the same curve.
-"$fe_de" "${rig[@]}" > "$work/straight.out" 2> "$work/straight.err" ||
+# 3. An uninterrupted run answers the same curve, and the same records as the resumed run (whose
+#    records before its checkpoint came back from it).
+"$fe_de" "${rig[@]}" --samples-csv "$work/straight_samples.csv" > "$work/straight.out" \
+  2> "$work/straight.err" ||
   fail "the uninterrupted run failed: $(tail -c 400 "$work/straight.err")"
 if cmp -s "$work/straight.out" "$work/resumed.out" && [[ -s "$work/straight.out" ]]; then
   echo "ok: the resumed curve equals the uninterrupted one"
 else
   fail "the resumed curve differs from the uninterrupted one:"
   diff "$work/straight.out" "$work/resumed.out"
+fi
+
+if cmp -s "$work/straight_samples.csv" "$work/samples.csv"; then
+  echo "ok: the resumed run's records equal the uninterrupted one's"
+else
+  fail "the resumed run's records differ from the uninterrupted one's"
+fi
+# The records: a header, then one line every 5 ms over the 0.45 s procedure, the ramp (phase 4)
+# last (that they filter to the curve's bits is FeDeTier's test).
+records="$(awk -F, 'NR == 1 && $1 == "time_s" && $6 == "drawbar_pull_n" && $9 == "sinkage_m" { h = 1 }
+  NR > 1 { n++; last = $2 } END { if (h) print n, last }' "$work/samples.csv")"
+read -r record_count last_phase <<< "$records"
+if [[ -z "$records" || "$record_count" -lt 88 || "$last_phase" != 4 ]]; then
+  fail "the records file: '$records' (records, last phase) or no header: $(head -2 "$work/samples.csv")"
+else
+  echo "ok: $record_count records, the last of phase $last_phase"
 fi
 
 # 4. The kept file: its configuration line, then the same CSV.
@@ -113,7 +132,8 @@ for args in "--checkpoint-every-s 5|--checkpoint-dir" "--curve-csv x.csv --bevam
 done
 
 # 7. The bench compares a tiny model's fe-ann curve with a right file.
-out="$(timeout 600 "$bench" --fe-de-curve "$work/curve.csv" --walks 2 --epochs 5 --threads 2 2>&1)"
+out="$(timeout 600 "$bench" --fe-de-curve "$work/curve.csv" --walks 2 --epochs 5 --threads 2 \
+  --samples-csv "$work/ann_samples.csv" 2>&1)"
 rc=$?
 if [[ $rc -ne 0 ]]; then
   fail "the bench with --fe-de-curve: exit $rc: $(tail -c 600 <<< "$out")"
@@ -123,6 +143,12 @@ elif ! grep -q "^fe-de curve: from $work/curve.csv (128 elements, 900 FE steps" 
   fail "the bench did not compare with the file: $(tail -c 800 <<< "$out")"
 else
   echo "ok: $(grep '^fe-ann against fe-de' <<< "$out")"
+fi
+if [[ "$(head -1 "$work/ann_samples.csv" 2>/dev/null)" != "$(head -1 "$work/samples.csv")" ]] ||
+   [[ "$(wc -l < "$work/ann_samples.csv")" != "$(wc -l < "$work/samples.csv")" ]]; then
+  fail "the bench's --samples-csv is not the fe-de records' columns and length"
+else
+  echo "ok: the fe-ann curve's records, $(wc -l < "$work/ann_samples.csv") lines as fe-de's"
 fi
 
 if [[ $failures -gt 0 ]]; then

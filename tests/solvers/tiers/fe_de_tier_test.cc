@@ -60,6 +60,15 @@ TractionCurve RunOn(const FeDeTier& tier, MPI_Comm communicator, int threads,
     std::cout << "  fe-de curve in "
               << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
               << " s, " << report.PointsMoved() << " RVEs migrated\n";
+    // The rig's records come with the curve, the whole run's (settling 0.15 s, rolling 0.1 s,
+    // the 0.2 s ramp: a record every 5 ms), and filtered again they give the curve's bits.
+    rig::RigRun run;
+    run.samples = report.samples;
+    EXPECT_GE(run.samples.size(), 85u);
+    EXPECT_TRUE(!run.samples.empty() && run.samples.back().phase == 4);
+    TractionCurve filtered_again;
+    filtered_again.points = rig::CurveFromRun(run, Request().slips, 0.25);
+    EXPECT_TRUE(SameBits(filtered_again, report.curve));
   }
   return report.curve;
 }
