@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # A long fe-de curve kept across runs: gonogo-fe-de --checkpoint-dir stopped part way and run
-# again resumes from its checkpoint and answers the curve of an uninterrupted run, byte for byte;
+# again resumes from its checkpoint and answers the curve of an uninterrupted run, byte for byte
+# (and its --samples-csv records too, whose first lines checkpoint_records.py reads from the
+# checkpoint);
 # --curve-csv keeps it with its configuration, and gonogo-bench-fe-ann --fe-de-curve compares an
 # fe-ann curve with it, refusing a file of another rig or a damaged one by name before it trains.
 #
@@ -68,6 +70,18 @@ if cmp -s "$work/straight_samples.csv" "$work/samples.csv"; then
   echo "ok: the resumed run's records equal the uninterrupted one's"
 else
   fail "the resumed run's records differ from the uninterrupted one's"
+fi
+# A checkpoint's records so far (solvers/rig/studies/checkpoint_records.py, reading rig.state as
+# the rig writes it) are the first lines of the run's own records file.
+checkpoint_records="$(dirname "$0")/../../solvers/rig/studies/checkpoint_records.py"
+python3 "$checkpoint_records" "$work/checkpoint/rig.state" > "$work/checkpoint_records.csv" ||
+  fail "checkpoint_records.py could not read the kept checkpoint"
+lines="$(wc -l < "$work/checkpoint_records.csv")"
+if [[ "$lines" -ge 2 ]] &&
+   head -n "$lines" "$work/samples.csv" | cmp -s - "$work/checkpoint_records.csv"; then
+  echo "ok: the checkpoint's $((lines - 1)) records are the run's first"
+else
+  fail "the checkpoint's records ($lines lines) are not the first lines of the run's records"
 fi
 # The records: a header, then one line every 5 ms over the 0.45 s procedure, the ramp (phase 4)
 # last (that they filter to the curve's bits is FeDeTier's test).
