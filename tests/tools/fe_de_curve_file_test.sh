@@ -2,9 +2,9 @@
 # A long fe-de curve kept across runs: gonogo-fe-de --checkpoint-dir stopped part way and run
 # again resumes from its checkpoint and answers the curve of an uninterrupted run, byte for byte
 # (and its --samples-csv records too, whose first lines checkpoint_records.py reads from the
-# checkpoint);
-# --curve-csv keeps it with its configuration, and gonogo-bench-fe-ann --fe-de-curve compares an
-# fe-ann curve with it, refusing a file of another rig or a damaged one by name before it trains.
+# checkpoint); --curve-csv keeps it with its configuration, and gonogo-bench-fe-ann --fe-de-curve
+# compares an fe-ann curve with it, refusing a file of another rig or a damaged one by name before
+# it trains.
 #
 #   fe_de_curve_file_test.sh GONOGO_FE_DE GONOGO_BENCH_FE_ANN
 #
