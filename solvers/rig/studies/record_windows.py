@@ -47,12 +47,15 @@ def main():
             if not inside:
                 print(f"  {path}: no records")
                 continue
+            def mean(column):
+                return statistics.mean(r[column] for r in inside)
+
             fz = [r["vertical_force_n"] for r in inside]
-            print(f"  {path}: {len(inside)} records, D {statistics.mean(r['drawbar_pull_n'] for r in inside):.1f} N, "
-                  f"T {statistics.mean(r['torque_nm'] for r in inside):.2f} N m, "
+            print(f"  {path}: {len(inside)} records, D {mean('drawbar_pull_n'):.1f} N, "
+                  f"T {mean('torque_nm'):.2f} N m, "
                   f"F_z {statistics.mean(fz):.0f} N (sd {statistics.pstdev(fz):.0f} N, "
                   f"{sum(f < 0.1 * args.load_n for f in fz)} below W/10), "
-                  f"sinkage {1e3 * statistics.mean(r['sinkage_m'] for r in inside):.2f} mm")
+                  f"sinkage {1e3 * mean('sinkage_m'):.2f} mm")
 
 
 if __name__ == "__main__":
