@@ -1,7 +1,9 @@
 // gonogo-bench-fe-ann: the fe-ann tier's figures (issue "FE-ANN tier", benchmark).
 //
 //   gonogo-bench-fe-ann [--soil seed000_sand_rve100] [--preset tiny] [--steps 40] [--walks 12]
-//                       [--epochs 200] [--architecture 64x64] [--wheel-load-n 1000] [--threads 2]
+//                       [--epochs 200] [--architecture 64x64] [--pressure-scaled PA]
+//                       [--walk-share F] [--training-seed 1] [--pressures-kpa P ...]
+//                       [--wheel-load-n 1000] [--threads 2]
 //                       [--fe-de-budget-s S | --fe-de-curve FILE] [--carry coordination_number]
 //                       [--return-after-steps N] [--no-fe-de] [--fe-ann-budget-s S]
 //                       [--progress-every-s 60] [--fe-ann-stop-at F]
@@ -100,6 +102,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> carried;
   int return_after_steps = 0, refine_rounds = 0, refine_epochs = 100;
   double refine_share = 0, refine_stop_at = -1;
+  double pressure_reference_pa = 0, walk_share = 0;
+  unsigned training_seed = 1;
+  std::vector<double> pressures_kpa;
   CLI::App app("gonogo-bench-fe-ann: the fe-ann tier's network, curve, training and memory",
                "gonogo-bench-fe-ann");
   app.add_option("--soil", soil_name, "dem-hertz-mindlin soil of the catalogue")->capture_default_str();
@@ -111,6 +116,21 @@ int main(int argc, char** argv) {
                  "rotated copies of each training path added to the training set")
       ->capture_default_str();
   app.add_option("--architecture", architecture_text, "MLP hidden widths joined by x")
+      ->capture_default_str();
+  app.add_option("--pressure-scaled", pressure_reference_pa,
+                 "MLPs that see the stress relative to max(p, 0) + this reference pressure (Pa) "
+                 "and answer d_sigma over it (stress_surrogate.h); 0: unscaled")
+      ->check(CLI::Range(0.0, 1e7))
+      ->capture_default_str();
+  app.add_option("--walk-share", walk_share,
+                 "the random walks' share of the training loss; 0: their share of the steps")
+      ->check(CLI::Range(0.0, 0.99))
+      ->capture_default_str();
+  app.add_option("--pressures-kpa", pressures_kpa,
+                 "confining pressures of the training paths, kPa, increasing (default: 2.5 5 10 "
+                 "20 40 80)");
+  app.add_option("--training-seed", training_seed,
+                 "the first member's seed of weights and batch order (member k: seed + k)")
       ->capture_default_str();
   app.add_option("--return-after-steps", return_after_steps,
                  "a fallen-back point returns to the network after this many unflagged FE steps "
@@ -193,6 +213,13 @@ int main(int argc, char** argv) {
       recipe.architecture.hidden_widths.push_back(std::stoi(width));
     }
     recipe.architecture.carried_variables = carried;
+    recipe.architecture.pressure_reference_pa = pressure_reference_pa;
+    recipe.walk_share = walk_share;
+    recipe.training.seed = training_seed;
+    if (!pressures_kpa.empty()) {
+      recipe.pressures_pa.clear();
+      for (double kpa : pressures_kpa) recipe.pressures_pa.push_back(1e3 * kpa);
+    }
     const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(preset);
     TractionRequest request;
     request.soil.soil_name = soil_name;

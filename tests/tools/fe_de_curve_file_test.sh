@@ -145,12 +145,18 @@ for args in "--checkpoint-every-s 5|--checkpoint-dir" "--curve-csv x.csv --bevam
   fi
 done
 
-# 7. The bench compares a tiny model's fe-ann curve with a right file.
+# 7. The bench compares a tiny model's fe-ann curve with a right file; the model is of the recipe
+#    its options ask for (pressure-scaled at 3 kPa; three training pressures, so its held-out
+#    triaxial lies between the first two).
 out="$(timeout 600 "$bench" --fe-de-curve "$work/curve.csv" --walks 2 --epochs 5 --threads 2 \
-  --samples-csv "$work/ann_samples.csv" 2>&1)"
+  --samples-csv "$work/ann_samples.csv" --pressure-scaled 3000 --walk-share 0.6 \
+  --training-seed 2 --pressures-kpa 2.5 5 10 2>&1)"
 rc=$?
 if [[ $rc -ne 0 ]]; then
   fail "the bench with --fe-de-curve: exit $rc: $(tail -c 600 <<< "$out")"
+elif ! grep -q "^# gonogo-bench-fe-ann: .*-pressure-scaled-3000pa" <<< "$out" ||
+     ! grep -q "^held-out: triaxial 3.53553 kPa" <<< "$out"; then
+  fail "the bench's model is not the recipe asked for: $(head -c 800 <<< "$out")"
 elif ! grep -q "^fe-de curve: from $work/curve.csv (128 elements, 900 FE steps" <<< "$out" ||
      ! grep -qE "^fe-ann against fe-de, worst over the slips: drawbar pull [0-9.]+ % of W" \
        <<< "$out"; then
