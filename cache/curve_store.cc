@@ -46,9 +46,10 @@ std::optional<SoilParameters> ParseStoredParameters(const std::string& text) {
 }
 
 // A surrogate run as one line of "name=value" words, the fallback steps comma-separated:
-// "fe_steps=900 fallbacks=2 at=449,637 below_floor=0 returns=0 unanswered=0 kept=2 updates=114041
-// network_s=2.28 fallback_s=1.01"; "" for a curve without one. A line written before a figure
-// existed reads it as 0 (below_floor).
+// "fe_steps=900 fallbacks=2 at=449,637 below_floor=0 beyond_distance=2 beyond_spread=0 returns=0
+// unanswered=0 kept=2 updates=114041 network_s=2.28 fallback_s=1.01"; "" for a curve without one.
+// A line written before a figure existed reads it as 0 (below_floor, beyond_distance,
+// beyond_spread).
 std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
   if (!run) return "";
   std::ostringstream out;
@@ -57,7 +58,9 @@ std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
   for (std::size_t k = 0; k < run->fallback_point_steps.size(); ++k) {
     out << (k ? "," : "") << run->fallback_point_steps[k];
   }
-  out << " below_floor=" << run->fallbacks_below_pressure_floor << " returns=" << run->returns
+  out << " below_floor=" << run->fallbacks_below_pressure_floor
+      << " beyond_distance=" << run->fallbacks_beyond_distance
+      << " beyond_spread=" << run->fallbacks_beyond_spread << " returns=" << run->returns
       << " unanswered=" << run->unanswered_flags << " kept=" << run->fallback_paths_kept
       << " updates=" << run->network_point_updates << " network_s=" << run->network_seconds
       << " fallback_s=" << run->fallback_seconds;
@@ -79,6 +82,10 @@ std::optional<SurrogateRun> ParseSurrogateRunText(const std::string& text) {
       else if (name == "returns") run.returns = std::stoll(value);
       else if (name == "below_floor")
         run.fallbacks_below_pressure_floor = std::stoi(value);
+      else if (name == "beyond_distance")
+        run.fallbacks_beyond_distance = std::stoi(value);
+      else if (name == "beyond_spread")
+        run.fallbacks_beyond_spread = std::stoi(value);
       else if (name == "unanswered") run.unanswered_flags = std::stoll(value);
       else if (name == "kept") run.fallback_paths_kept = std::stoi(value);
       else if (name == "updates") run.network_point_updates = std::stoll(value);

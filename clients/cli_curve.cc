@@ -98,6 +98,13 @@ void PrintSurrogateRun(const v1::SurrogateRun& run) {
     }
     if (steps > kStepsShown) std::cout << " and " << steps - kStepsShown << " more";
     std::cout << " of " << run.fe_steps();
+    // Which of the guard's tests flagged them (one point may be flagged by several).
+    if (run.fallbacks_beyond_distance() > 0) {
+      std::cout << ", " << run.fallbacks_beyond_distance() << " beyond the envelope's distance";
+    }
+    if (run.fallbacks_beyond_spread() > 0) {
+      std::cout << ", " << run.fallbacks_beyond_spread() << " beyond the members' spread";
+    }
     if (run.fallbacks_below_pressure_floor() > 0) {
       std::cout << ", " << run.fallbacks_below_pressure_floor() << " below the pressure floor";
     }

@@ -500,7 +500,7 @@ Study GatherStudy(const StudyCommandLine& line, const SoilParameters& soil,
     recipe.pressures_pa.clear();
     for (double kpa : line.pressures_kpa) recipe.pressures_pa.push_back(kpa * 1e3);
   }
-  recipe.Validate("");
+  recipe.ValidateAsOptions();
   Study study;
   study.soil = soil;
   study.rve = rve;

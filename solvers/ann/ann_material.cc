@@ -432,7 +432,8 @@ std::vector<material::PointResponse> AnnMaterial::Update(
                               want_tangent);
       if (responses[i].status == material::UpdateStatus::kOk) {
         log_->RecordFallback({committed.steps(), answer.distance, answer.relative_spread,
-                              answer.below_pressure_floor});
+                              answer.below_pressure_floor, answer.beyond_distance,
+                              answer.beyond_spread});
       }
       continue;
     }

@@ -79,6 +79,8 @@ class FallbackLog {
     double distance = 0;          // the flag's measures
     double relative_spread = 0;
     bool below_pressure_floor = false;  // flagged by the ensemble's pressure floor
+    bool beyond_distance = false;       // flagged by the envelope's distance
+    bool beyond_spread = false;         // flagged by the members' spread
   };
   void RecordFallback(const Event& event);
   void RecordUnansweredFlag();

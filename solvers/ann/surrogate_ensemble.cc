@@ -279,9 +279,10 @@ std::vector<EnsembleAnswer> SurrogateEnsemble::Answer(const std::vector<Surrogat
     answer.mean_pressure_pa = -inputs[n].stress_pa.head<3>().mean();
     answer.below_pressure_floor =
         pressure_floor_pa_ > 0 && answer.mean_pressure_pa < pressure_floor_pa_;
-    answer.out_of_distribution = answer.distance > distance_threshold_ ||
-                                 answer.relative_spread > spread_threshold_ ||
-                                 answer.below_pressure_floor;
+    answer.beyond_distance = answer.distance > distance_threshold_;
+    answer.beyond_spread = answer.relative_spread > spread_threshold_;
+    answer.out_of_distribution =
+        answer.beyond_distance || answer.beyond_spread || answer.below_pressure_floor;
   }
   return answers;
 }

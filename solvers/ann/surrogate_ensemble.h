@@ -88,7 +88,11 @@ struct EnsembleAnswer {
   double relative_spread = 0;                     // see above
   double mean_pressure_pa = 0;                    // -tr(sigma)/3 before the step
   bool below_pressure_floor = false;              // of a floor that is set (see above)
-  bool out_of_distribution = false;
+  // Which of the guard's tests flagged the input (any may, together): the envelope's distance
+  // beyond its threshold, the members' spread beyond its threshold, the pressure floor.
+  bool beyond_distance = false;
+  bool beyond_spread = false;
+  bool out_of_distribution = false;  // flagged by any of the three
 };
 
 class SurrogateEnsemble {

@@ -128,7 +128,10 @@ struct SurrogateRun {
   // each one's own history (one step per FE step) at which it fell back.
   int fallbacks = 0;
   std::vector<std::int64_t> fallback_point_steps;
-  int fallbacks_below_pressure_floor = 0;  // of them, those flagged by the guard's pressure floor
+  // Of them, those each of the guard's tests flagged (a point may be flagged by more than one):
+  int fallbacks_beyond_distance = 0;       // the training envelope's distance
+  int fallbacks_beyond_spread = 0;         // the members' spread
+  int fallbacks_below_pressure_floor = 0;  // the pressure floor
   std::int64_t returns = 0;           // fallen-back points sent back to the network
   std::int64_t unanswered_flags = 0;  // flags the network answered anyway (fallback off)
   int fallback_paths_kept = 0;        // fallen-back points' RVE paths kept as training data

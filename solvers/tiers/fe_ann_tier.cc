@@ -51,7 +51,8 @@ std::string VersionOf(const FeAnnOptions& options) {
 }
 
 // A running curve's fallbacks in words, for its job's progress: "12 points fallen back to their
-// RVEs (RVEs 143 s, network 54 s)". The fallbacks are what makes an fe-ann curve long.
+// RVEs (flagged: distance 12, spread 1), 2 sent back (RVEs 143 s, network 54 s)". The fallbacks
+// are what makes an fe-ann curve long, and which test flagged them says which threshold to look at.
 std::string ProgressNote(const AnnProgress& progress) {
   char seconds[96];
   std::snprintf(seconds, sizeof seconds, "RVEs %.0f s, network %.0f s", progress.fallback_seconds,
@@ -64,11 +65,26 @@ std::string ProgressNote(const AnnProgress& progress) {
   } else {
     note = std::to_string(progress.fallbacks) + " points fallen back to their RVEs";
   }
+  if (progress.fallbacks > 0) {
+    const std::string flags =
+        FallbackFlagsPhrase(progress.fallbacks_beyond_distance, progress.fallbacks_beyond_spread,
+                            progress.fallbacks_below_pressure_floor);
+    note += " (" + flags + ")";
+  }
   if (progress.returns > 0) note += ", " + std::to_string(progress.returns) + " sent back";
   return note + " (" + seconds + ")";
 }
 
 }  // namespace
+
+std::string FallbackFlagsPhrase(int beyond_distance, int beyond_spread, int below_pressure_floor) {
+  std::string phrase = "flagged: distance " + std::to_string(beyond_distance) + ", spread " +
+                       std::to_string(beyond_spread);
+  if (below_pressure_floor > 0) {
+    phrase += ", pressure floor " + std::to_string(below_pressure_floor);
+  }
+  return phrase;
+}
 
 void FeAnnOptions::Validate(const std::string& p) const {
   fe_de.Validate(p + "fe_de.");
@@ -236,7 +252,13 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
       progress.fraction = fraction;
       if (material) {
         const ann::FallbackLog& log = material->log();
-        progress.fallbacks = static_cast<int>(log.fallbacks().size());
+        const std::vector<ann::FallbackLog::Event> fallbacks = log.fallbacks();
+        progress.fallbacks = static_cast<int>(fallbacks.size());
+        for (const ann::FallbackLog::Event& event : fallbacks) {
+          progress.fallbacks_beyond_distance += event.beyond_distance ? 1 : 0;
+          progress.fallbacks_beyond_spread += event.beyond_spread ? 1 : 0;
+          progress.fallbacks_below_pressure_floor += event.below_pressure_floor ? 1 : 0;
+        }
         progress.returns = log.returns();
         progress.network_seconds = log.network_seconds();
         progress.fallback_seconds = log.fallback_seconds();
@@ -263,6 +285,8 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
     const ann::FallbackLog& log = material->log();
     for (const ann::FallbackLog::Event& event : log.fallbacks()) {
       report.fallback_steps.push_back(event.point_step);
+      report.fallbacks_beyond_distance += event.beyond_distance ? 1 : 0;
+      report.fallbacks_beyond_spread += event.beyond_spread ? 1 : 0;
       report.fallbacks_below_pressure_floor += event.below_pressure_floor ? 1 : 0;
     }
     report.fallbacks = static_cast<int>(report.fallback_steps.size());
@@ -277,6 +301,8 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
   run.fe_steps = report.fe_steps;
   run.fallbacks = report.fallbacks;
   run.fallback_point_steps = report.fallback_steps;
+  run.fallbacks_beyond_distance = report.fallbacks_beyond_distance;
+  run.fallbacks_beyond_spread = report.fallbacks_beyond_spread;
   run.fallbacks_below_pressure_floor = report.fallbacks_below_pressure_floor;
   run.returns = report.returns;
   run.unanswered_flags = report.unanswered_flags;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "solvers/ann/ann_material.h"
 #include "solvers/ann/path_recorder.h"
@@ -68,7 +69,7 @@ void SurrogateRecipe::Validate(const std::string& p) const {
           "must hold 2 to 64 pressures");
   for (double pressure : pressures_pa) {
     Require(std::isfinite(pressure) && pressure > 0 && pressure <= 1e9, p + "pressures_pa",
-            "each must be a positive pressure up to 1 GPa, Pa");
+            "each must be a positive pressure, at most 1 GPa");
   }
   Require(std::is_sorted(pressures_pa.begin(), pressures_pa.end()), p + "pressures_pa",
           "must be in increasing order");
@@ -83,9 +84,32 @@ void SurrogateRecipe::Validate(const std::string& p) const {
   Require(std::isfinite(walk_share) && walk_share >= 0 && walk_share <= 0.99, p + "walk_share",
           "must lie in [0, 0.99]");
   Require(walk_share == 0 || rotated_copies == 0, p + "walk_share",
-          "weighs the walks of the laboratory's frame only: not with rotated_copies");
+          "weighs the walks of the laboratory's frame only: not with rotated copies");
   Require(walk_share == 0 || training.history_weights.empty(), p + "walk_share",
           "sets the histories' weights itself: not with training.history_weights");
+}
+
+void SurrogateRecipe::ValidateAsOptions() const {
+  // The option of each field one sets; a field no option sets keeps its own name.
+  static const std::map<std::string, std::string> kOptionOfField = {
+      {"steps", "--steps"},
+      {"walks", "--walks"},
+      {"held_out_walks", "--held-out-walks"},
+      {"pressures_pa", "--pressures-kpa"},
+      {"threads", "--threads"},
+      {"rotated_copies", "--rotated-copies"},
+      {"walk_share", "--walk-share"},
+      {"architecture.hidden_widths", "--architecture"},
+      {"architecture.carried_variables", "--carry"},
+      {"architecture.pressure_reference_pa", "--pressure-scaled"},
+      {"training.epochs", "--epochs"}};
+  try {
+    Validate("");
+  } catch (const InputError& e) {
+    const auto option = kOptionOfField.find(e.field());
+    if (option == kOptionOfField.end()) throw;
+    throw InputError(option->second, std::string(e.what()).substr(e.field().size() + 2));
+  }
 }
 
 std::vector<double> WalkShareWeights(const std::vector<NamedLabPath>& training_paths,

@@ -55,6 +55,10 @@ struct SurrogateRecipe {
   double walk_share = 0;
   SurrogateRecipe();
   void Validate(const std::string& field_prefix) const;
+  // Validate, its InputError naming the command-line option that sets the field where one does
+  // (the options gonogo-ann and gonogo-bench-fe-ann share: --steps, --walks, --pressures-kpa,
+  // --walk-share, ...), so that a user reads the option they gave rather than the recipe's field.
+  void ValidateAsOptions() const;
 };
 
 std::vector<NamedLabPath> TrainingPaths(const SurrogateRecipe& recipe);

@@ -76,6 +76,12 @@ double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+std::string FlagsOf(const tiers::AnnProgress& progress) {
+  return tiers::FallbackFlagsPhrase(progress.fallbacks_beyond_distance,
+                                    progress.fallbacks_beyond_spread,
+                                    progress.fallbacks_below_pressure_floor);
+}
+
 // Microseconds per point of `evaluate` on a batch of `points`, repeated to about 0.3 s.
 double MicrosecondsPerPoint(std::size_t points, const std::function<void()>& evaluate) {
   evaluate();  // warm
@@ -220,6 +226,7 @@ int main(int argc, char** argv) {
       recipe.pressures_pa.clear();
       for (double kpa : pressures_kpa) recipe.pressures_pa.push_back(1e3 * kpa);
     }
+    recipe.ValidateAsOptions();  // before the fe-de curve file is read and the model trained
     const tiers::FeDeOptions fe_de = tiers::FeDeOptions::Preset(preset);
     TractionRequest request;
     request.soil.soil_name = soil_name;
@@ -352,10 +359,11 @@ int main(int argc, char** argv) {
         last_progress = p;
         if (Since(run_start) - last_line_s < progress_every_s) return;
         last_line_s = Since(run_start);
-        std::printf("  %s %.0f s: %.1f %% of the FE steps; %d fallbacks (%lld returned), "
-                    "fallbacks %.1f s, network %.1f s\n",
-                    label.c_str(), last_line_s, 100 * p.fraction, p.fallbacks,
-                    static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds);
+        std::printf(
+            "  %s %.0f s: %.1f %% of the FE steps; %d fallbacks (%s; %lld returned), "
+            "fallbacks %.1f s, network %.1f s\n",
+            label.c_str(), last_line_s, 100 * p.fraction, p.fallbacks, FlagsOf(p).c_str(),
+            static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds);
         std::fflush(stdout);
       };
       std::vector<ann::StrainHistory> fallback_paths;
@@ -365,13 +373,14 @@ int main(int argc, char** argv) {
                          refine_rounds > 0 ? &fallback_paths : nullptr);
       } catch (const CancelledError&) {
         const tiers::AnnProgress& p = last_progress;
-        std::printf("%s curve: stopped after %.0f s at %.1f %% of the FE "
-                    "steps: %d fallbacks (%lld returned), fallbacks %.1f s, network %.1f s, the "
-                    "rest (FE, contact) %.1f s; %zu fallback paths; peak RSS %.0f MB\n",
-                    label.c_str(), Since(run_start), 100 * p.fraction, p.fallbacks,
-                    static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds,
-                    Since(run_start) - p.fallback_seconds - p.network_seconds,
-                    fallback_paths.size(), PeakRssMb());
+        std::printf(
+            "%s curve: stopped after %.0f s at %.1f %% of the FE "
+            "steps: %d fallbacks (%s; %lld returned), fallbacks %.1f s, network %.1f s, "
+            "the rest (FE, contact) %.1f s; %zu fallback paths; peak RSS %.0f MB\n",
+            label.c_str(), Since(run_start), 100 * p.fraction, p.fallbacks, FlagsOf(p).c_str(),
+            static_cast<long long>(p.returns), p.fallback_seconds, p.network_seconds,
+            Since(run_start) - p.fallback_seconds - p.network_seconds, fallback_paths.size(),
+            PeakRssMb());
         std::fflush(stdout);
         return fallback_paths;
       }
@@ -391,16 +400,20 @@ int main(int argc, char** argv) {
         std::snprintf(speedup, sizeof speedup, "%.1fx%s", de_s / ann_s,
                       fe_de_budget_s > 0 ? " of the projection" : "");
       }
-      std::printf("%s curve: %.2f s wall (%s): network %.2f s (%lld point updates, %.1f us "
-                  "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s "
-                  "(%lld returned; %zu fallback paths), model load %.3f s, FE and contact %.2f s; "
-                  "peak RSS %.0f MB\n",
-                  label.c_str(), ann_s, speedup, ann.network_seconds,
-                  static_cast<long long>(ann.network_point_updates),
-                  1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
-                  static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
-                  static_cast<long long>(ann.returns), fallback_paths.size(),
-                  ann.model_load_seconds, rest_s, PeakRssMb());
+      std::printf(
+          "%s curve: %.2f s wall (%s): network %.2f s (%lld point updates, %.1f us "
+          "each; %lld answers returned to admissible stresses), fallbacks %d in %.2f s "
+          "(%s; %lld returned; %zu fallback paths), model load %.3f s, FE and contact "
+          "%.2f s; peak RSS %.0f MB\n",
+          label.c_str(), ann_s, speedup, ann.network_seconds,
+          static_cast<long long>(ann.network_point_updates),
+          1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
+          static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
+          tiers::FallbackFlagsPhrase(ann.fallbacks_beyond_distance, ann.fallbacks_beyond_spread,
+                                     ann.fallbacks_below_pressure_floor)
+              .c_str(),
+          static_cast<long long>(ann.returns), fallback_paths.size(), ann.model_load_seconds,
+          rest_s, PeakRssMb());
       if (fe_de_budget_s > 0 || no_fe_de) {
         std::printf("%s curve (no fe-de curve to compare with):\nslip,drawbar_pull_n,torque_nm,"
                     "sinkage_m\n",

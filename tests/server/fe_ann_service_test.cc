@@ -99,7 +99,8 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   EXPECT_NE(own_guard.out.find("surrogate model " + id + ", computed by rank 1"), std::string::npos)
       << "not the default guard's cached curve: " << own_guard.out;
   // A pressure floor above every stress of the soil: each of the rig's 128 points is answered by
-  // its RVE from its first increment, and the run says the floor flagged them.
+  // its RVE from its first increment, and the run says the floor flagged them (and which of them
+  // the model's own thresholds flagged too).
   const CliRun floored =
       Gonogo(server.endpoint(), std::string(kWheel) + " --pressure-floor-kpa 1000000");
   ASSERT_EQ(floored.exit_code, 0) << floored.out;
@@ -108,15 +109,16 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
   std::smatch floored_run;
   ASSERT_TRUE(std::regex_search(
       floored.out, floored_run,
-      std::regex("(\\d+) of its points fell back to their RVEs, at steps 0, 0, [^;]* of 900, "
-                 "(\\d+) below the pressure floor")))
+      std::regex("(\\d+) of its points fell back to their RVEs, at steps 0, 0, [^;]* of 900"
+                 "(?:, \\d+ beyond the envelope's distance)?(?:, \\d+ beyond the members' "
+                 "spread)?, (\\d+) below the pressure floor")))
       << floored.out;
   EXPECT_GE(std::stoi(floored_run[1]), 128) << floored.out;
   EXPECT_EQ(floored_run[1], floored_run[2]) << floored.out;
 
   // The curve's provenance says how its points were answered, computed and from the cache alike:
   // with the fallback off none fell back; with it on (the cached curve above) the line names the
-  // fallbacks and when, or says there were none.
+  // fallbacks, when, and which of the guard's tests flagged them, or says there were none.
   const std::regex run_line("surrogate run: [^\n]*");
   std::smatch computed_run, cached_run;
   ASSERT_TRUE(std::regex_search(own_guard.out, computed_run, run_line)) << own_guard.out;
@@ -133,10 +135,12 @@ TEST(FeAnnService, RefusedWithoutAModelThenComputedWithARegisteredOne) {
             << "\n";
   EXPECT_TRUE(std::regex_match(
       guarded_run.str(),
-      std::regex("surrogate run: (no point fell back to its RVE in [0-9]+ FE steps|[0-9]+ (point|of "
-                 "its points) fell back to (its RVE|their RVEs), at steps? [0-9, and]+( and [0-9]+ "
-                 "more)? of [0-9]+ \\([0-9]+ paths kept for training\\)); network [0-9.e+-]+ s "
-                 "for [0-9]+ point updates(, fallbacks [0-9.e+-]+ s)?")))
+      std::regex(
+          "surrogate run: (no point fell back to its RVE in [0-9]+ FE steps|[0-9]+ (point|of "
+          "its points) fell back to (its RVE|their RVEs), at steps? [0-9, and]+( and [0-9]+ "
+          "more)? of [0-9]+(, [0-9]+ beyond the envelope's distance|, [0-9]+ beyond the "
+          "members' spread){1,2} \\([0-9]+ paths kept for training\\)); network [0-9.e+-]+ s "
+          "for [0-9]+ point updates(, fallbacks [0-9.e+-]+ s)?")))
       << guarded_run.str();
 
   // A curve job's progress tells how its run goes: its points fallen back so far (the fallbacks

@@ -132,6 +132,19 @@ expect_refusal "a damaged row" "line 5: 'abc'" --fe-de-curve "$work/damaged.csv"
 sed '/^0.5000,/d' "$work/curve.csv" > "$work/three_slips.csv"
 expect_refusal "other slips" "slips are" --fe-de-curve "$work/three_slips.csv"
 
+# 5b. The bench refuses a recipe its options make wrong, naming the option, before training.
+for args in "--pressures-kpa 5 2.5|--pressures-kpa: must be in increasing order" \
+            "--pressures-kpa 5|--pressures-kpa: must hold 2 to 64 pressures" \
+            "--walk-share 0.6 --rotated-copies 1|--walk-share: weighs the walks"; do
+  out="$(timeout 60 "$bench" --no-fe-de ${args%%|*} 2>&1)"
+  rc=$?
+  if [[ $rc -ne 1 || "$out" != *"${args##*|}"* || "$out" == *"training:"* ]]; then
+    fail "the bench with ${args%%|*}: exit $rc, expected 1 and '${args##*|}' before training: $out"
+  else
+    echo "ok: the bench with ${args%%|*} -> ${out##*gonogo-bench-fe-ann: }"
+  fi
+done
+
 # 6. gonogo-fe-de refuses options that would be ignored: a checkpoint period without a directory,
 #    a curve file or checkpoints for a run that is not one whole curve.
 for args in "--checkpoint-every-s 5|--checkpoint-dir" "--curve-csv x.csv --bevameter|--bevameter" \

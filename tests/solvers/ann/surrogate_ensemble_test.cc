@@ -104,7 +104,24 @@ TEST(SurrogateEnsemble, FlagsWhatLiesOutsideItsTrainingAndNotWhatLiesInside) {
   EXPECT_LT(FlaggedFraction(held_out), 0.1);
   EXPECT_GT(FlaggedFraction(deep), 0.9);
   EXPECT_TRUE(jumped.out_of_distribution);
+  EXPECT_TRUE(jumped.beyond_distance);
   EXPECT_GT(MeanSpread(deep), MeanSpread(held_out));
+  // Each answer says which test flagged it: the distance and the spread against their thresholds,
+  // each alone, and flagged when either is (no floor is set).
+  int by_distance = 0;
+  int by_spread = 0;
+  for (const std::vector<EnsembleAnswer>* answers : {&inside, &held_out, &deep}) {
+    for (const EnsembleAnswer& answer : *answers) {
+      EXPECT_EQ(answer.beyond_distance, answer.distance > ensemble.distance_threshold());
+      EXPECT_EQ(answer.beyond_spread, answer.relative_spread > ensemble.spread_threshold());
+      EXPECT_FALSE(answer.below_pressure_floor);
+      EXPECT_EQ(answer.out_of_distribution, answer.beyond_distance || answer.beyond_spread);
+      by_distance += answer.beyond_distance;
+      by_spread += answer.beyond_spread;
+    }
+  }
+  std::cout << "  flagged by distance " << by_distance << ", by spread " << by_spread << "\n";
+  EXPECT_GT(by_distance, 0);
 }
 
 TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
@@ -141,6 +158,8 @@ TEST(SurrogateEnsemble, ThresholdsCanBeSetAndTheEnsembleSavedAndLoaded) {
   int below = 0;
   for (const EnsembleAnswer& answer : ensemble.Answer(deep, false)) {
     EXPECT_EQ(answer.out_of_distribution, answer.mean_pressure_pa < ensemble.pressure_floor_pa());
+    EXPECT_EQ(answer.below_pressure_floor, answer.out_of_distribution);
+    EXPECT_FALSE(answer.beyond_distance || answer.beyond_spread);  // thresholds no input meets
     below += answer.out_of_distribution;
   }
   EXPECT_GT(below, 0);
