@@ -332,7 +332,7 @@ RigRun Simulate(const SoilBinFactory& soil_bin, const RigWheel& wheel, const Sch
       sums = SampleSums();
     }
     if (step % options.poll_every_steps == 0) {
-      if (options.cancelled && options.cancelled()) throw CancelledError();
+      if (options.cancelled && options.cancelled()) throw StoppedRunError(run.samples);
       if (options.progress) options.progress(static_cast<double>(step) / steps);
       const auto now = std::chrono::steady_clock::now();
       if (checkpointing && step + 1 < steps &&

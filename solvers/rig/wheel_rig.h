@@ -19,6 +19,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "solvers/common/tier.h"
@@ -101,9 +102,20 @@ struct RigRun {
   int steps = 0;
 };
 
+// A run stopped by its cancellation check: the CancelledError its callers know, with the records
+// the run had taken by then, so that a study stopped part-way keeps what it measured.
+class StoppedRunError : public CancelledError {
+ public:
+  explicit StoppedRunError(std::vector<RigSample> samples) : samples_(std::move(samples)) {}
+  const std::vector<RigSample>& samples() const { return samples_; }
+
+ private:
+  std::vector<RigSample> samples_;
+};
+
 // Runs the procedure in a bin of `soil_bin`. Throws InputError for bad parameters,
 // CannotCarryError when the wheel sinks to its axle, std::runtime_error when the bin fails (an
-// element turns inside out), CancelledError when cancelled.
+// element turns inside out), StoppedRunError (a CancelledError) when cancelled.
 RigRun RunDrawbarPullTest(const SoilBinFactory& soil_bin, const RigWheel& wheel,
                           const DrawbarPullProcedure& procedure, const RigOptions& options);
 

@@ -56,6 +56,7 @@
 
 #include "solvers/ann/strain_history.h"
 #include "solvers/dem/rve/rve_soil.h"
+#include "solvers/rig/wheel_rig.h"
 #include "solvers/tiers/fe_ann_tier.h"
 #include "solvers/tiers/fe_de_curve_file.h"
 #include "solvers/tiers/fe_de_pace.h"
@@ -74,6 +75,12 @@ double PeakRssMb() {
 
 double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void WriteRecords(const std::string& path, const std::vector<rig::RigSample>& samples) {
+  std::ofstream out(path);
+  out << rig::RigSamplesCsv(samples);
+  if (!out) throw std::runtime_error("could not write --samples-csv " + path);
 }
 
 std::string FlagsOf(const tiers::AnnProgress& progress) {
@@ -371,7 +378,14 @@ int main(int argc, char** argv) {
       try {
         ann = fe_ann.Run(request, ann_context, print_progress,
                          refine_rounds > 0 ? &fallback_paths : nullptr);
-      } catch (const CancelledError&) {
+      } catch (const CancelledError& stop) {
+        // The rig's records up to the stop, where it says them (rig::StoppedRunError).
+        const auto* stopped = dynamic_cast<const rig::StoppedRunError*>(&stop);
+        if (stopped && !samples_csv.empty()) {
+          WriteRecords(samples_csv, stopped->samples());
+          std::printf("%s curve: its rig records up to the stop (%zu) in %s\n", label.c_str(),
+                      stopped->samples().size(), samples_csv.c_str());
+        }
         const tiers::AnnProgress& p = last_progress;
         std::printf(
             "%s curve: stopped after %.0f s at %.1f %% of the FE "
@@ -386,9 +400,7 @@ int main(int argc, char** argv) {
       }
       const double ann_s = Since(run_start);
       if (!samples_csv.empty()) {
-        std::ofstream out(samples_csv);
-        out << rig::RigSamplesCsv(ann.samples);
-        if (!out) throw std::runtime_error("could not write --samples-csv " + samples_csv);
+        WriteRecords(samples_csv, ann.samples);
         std::printf("%s curve: its rig records in %s\n", label.c_str(), samples_csv.c_str());
       }
       const double rest_s =

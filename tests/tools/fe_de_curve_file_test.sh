@@ -184,6 +184,24 @@ else
   echo "ok: the fe-ann curve's records, $(wc -l < "$work/ann_samples.csv") lines as fe-de's"
 fi
 
+# 8. A bench run stopped part-way (--fe-ann-stop-at) still writes its rig records up to the stop:
+#    the fe-de records' columns, from the run's start, fewer than a whole run's.
+rm -f "$work/stopped_samples.csv"
+out="$(timeout 600 "$bench" --no-fe-de --walks 2 --epochs 5 --threads 2 --fe-ann-stop-at 0.5 \
+  --samples-csv "$work/stopped_samples.csv" 2>&1)"
+rc=$?
+stopped_lines="$(wc -l < "$work/stopped_samples.csv" 2>/dev/null || echo 0)"
+if [[ $rc -ne 0 ]] || ! grep -q "curve: its rig records up to the stop" <<< "$out"; then
+  fail "the stopped bench run: exit $rc, no records written: $(tail -c 600 <<< "$out")"
+elif [[ "$(head -1 "$work/stopped_samples.csv")" != "$(head -1 "$work/samples.csv")" ]] ||
+     [[ $stopped_lines -le 2 || $stopped_lines -ge $(wc -l < "$work/samples.csv") ]] ||
+     [[ "$(sed -n 2p "$work/stopped_samples.csv" | cut -d, -f1-2)" != \
+        "$(sed -n 2p "$work/samples.csv" | cut -d, -f1-2)" ]]; then
+  fail "the stopped run's records are not the first of a run: $stopped_lines lines, $(head -2 "$work/stopped_samples.csv")"
+else
+  echo "ok: the stopped run's records, $stopped_lines lines of a whole run's $(wc -l < "$work/samples.csv")"
+fi
+
 if [[ $failures -gt 0 ]]; then
   echo "$failures failure(s)"
   exit 1

@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "solvers/common/errors.h"
+#include "solvers/rig/wheel_rig.h"
 #include "solvers/tiers/fe_de_tier.h"
 #include "tests/solvers/tiers/fe_de_test_configuration.h"
 
@@ -129,7 +130,8 @@ TEST(FeDeTier, SameCurveBitForBitAloneAndOnTwoAndThreeRanks) {
 }
 
 // The pool's collective cancellation: every member asks, the group agrees (logical or). Rank 2
-// wants out at its third check; the whole group stops there, every rank with CancelledError.
+// wants out at its third check; the whole group stops there, every rank with CancelledError, the
+// leader's carrying the rig's records up to the stop (rig::StoppedRunError).
 TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
   const int rank = WorldRank();
   const FeDeTier tier(TinyFeDeOptions());
@@ -144,7 +146,19 @@ TEST(FeDeTier, ACancelOnOneRankStopsTheWholeGroupAtTheSameCheck) {
     return any != 0;
   };
   const auto start = std::chrono::steady_clock::now();
-  EXPECT_THROW(tier.Compute(Request(), context), CancelledError) << "rank " << rank;
+  try {
+    tier.Compute(Request(), context);
+    ADD_FAILURE() << "rank " << rank << " was not stopped";
+  } catch (const rig::StoppedRunError& stopped) {
+    EXPECT_EQ(rank, 0) << "only the leader runs the rig";
+    ASSERT_FALSE(stopped.samples().empty());
+    for (std::size_t k = 1; k < stopped.samples().size(); ++k) {
+      EXPECT_GT(stopped.samples()[k].time_s, stopped.samples()[k - 1].time_s);
+    }
+    EXPECT_EQ(stopped.samples().front().phase, 1) << "the records from the run's start";
+  } catch (const CancelledError&) {
+    EXPECT_NE(rank, 0) << "the leader's stop carries no records";
+  }
   EXPECT_EQ(checks, 3) << "rank " << rank;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
