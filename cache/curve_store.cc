@@ -58,9 +58,9 @@ std::string SurrogateRunText(const std::optional<SurrogateRun>& run) {
   for (std::size_t k = 0; k < run->fallback_point_steps.size(); ++k) {
     out << (k ? "," : "") << run->fallback_point_steps[k];
   }
-  out << " below_floor=" << run->fallbacks_below_pressure_floor
-      << " beyond_distance=" << run->fallbacks_beyond_distance
-      << " beyond_spread=" << run->fallbacks_beyond_spread << " returns=" << run->returns
+  out << " below_floor=" << run->fallbacks_flagged.below_pressure_floor
+      << " beyond_distance=" << run->fallbacks_flagged.beyond_distance
+      << " beyond_spread=" << run->fallbacks_flagged.beyond_spread << " returns=" << run->returns
       << " unanswered=" << run->unanswered_flags << " kept=" << run->fallback_paths_kept
       << " updates=" << run->network_point_updates << " network_s=" << run->network_seconds
       << " fallback_s=" << run->fallback_seconds;
@@ -81,11 +81,11 @@ std::optional<SurrogateRun> ParseSurrogateRunText(const std::string& text) {
       else if (name == "fallbacks") run.fallbacks = std::stoi(value);
       else if (name == "returns") run.returns = std::stoll(value);
       else if (name == "below_floor")
-        run.fallbacks_below_pressure_floor = std::stoi(value);
+        run.fallbacks_flagged.below_pressure_floor = std::stoi(value);
       else if (name == "beyond_distance")
-        run.fallbacks_beyond_distance = std::stoi(value);
+        run.fallbacks_flagged.beyond_distance = std::stoi(value);
       else if (name == "beyond_spread")
-        run.fallbacks_beyond_spread = std::stoi(value);
+        run.fallbacks_flagged.beyond_spread = std::stoi(value);
       else if (name == "unanswered") run.unanswered_flags = std::stoll(value);
       else if (name == "kept") run.fallback_paths_kept = std::stoi(value);
       else if (name == "updates") run.network_point_updates = std::stoll(value);

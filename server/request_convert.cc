@@ -125,9 +125,9 @@ SurrogateRun FromProto(const v1::SurrogateRun& p) {
   run.fallbacks = static_cast<int>(p.fallbacks());
   run.fallback_point_steps.assign(p.fallback_point_steps().begin(),
                                   p.fallback_point_steps().end());
-  run.fallbacks_below_pressure_floor = static_cast<int>(p.fallbacks_below_pressure_floor());
-  run.fallbacks_beyond_distance = static_cast<int>(p.fallbacks_beyond_distance());
-  run.fallbacks_beyond_spread = static_cast<int>(p.fallbacks_beyond_spread());
+  run.fallbacks_flagged.below_pressure_floor = static_cast<int>(p.fallbacks_below_pressure_floor());
+  run.fallbacks_flagged.beyond_distance = static_cast<int>(p.fallbacks_beyond_distance());
+  run.fallbacks_flagged.beyond_spread = static_cast<int>(p.fallbacks_beyond_spread());
   run.returns = p.returns();
   run.unanswered_flags = p.unanswered_flags();
   run.fallback_paths_kept = static_cast<int>(p.fallback_paths_kept());
@@ -142,9 +142,10 @@ v1::SurrogateRun ToProto(const SurrogateRun& run) {
   p.set_fe_steps(run.fe_steps);
   p.set_fallbacks(static_cast<uint32_t>(run.fallbacks));
   for (std::int64_t step : run.fallback_point_steps) p.add_fallback_point_steps(step);
-  p.set_fallbacks_below_pressure_floor(static_cast<uint32_t>(run.fallbacks_below_pressure_floor));
-  p.set_fallbacks_beyond_distance(static_cast<uint32_t>(run.fallbacks_beyond_distance));
-  p.set_fallbacks_beyond_spread(static_cast<uint32_t>(run.fallbacks_beyond_spread));
+  p.set_fallbacks_below_pressure_floor(
+      static_cast<uint32_t>(run.fallbacks_flagged.below_pressure_floor));
+  p.set_fallbacks_beyond_distance(static_cast<uint32_t>(run.fallbacks_flagged.beyond_distance));
+  p.set_fallbacks_beyond_spread(static_cast<uint32_t>(run.fallbacks_flagged.beyond_spread));
   p.set_returns(run.returns);
   p.set_unanswered_flags(run.unanswered_flags);
   p.set_fallback_paths_kept(static_cast<uint32_t>(run.fallback_paths_kept));

@@ -120,6 +120,14 @@ struct TractionPoint {
   double motion_resistance_n = 0;   // N
 };
 
+// How many of a surrogate run's fallbacks each of its guard's tests flagged (a point may be flagged
+// by more than one).
+struct FallbackFlagCounts {
+  int beyond_distance = 0;       // the training envelope's distance
+  int beyond_spread = 0;         // the ensemble members' spread
+  int below_pressure_floor = 0;  // the pressure floor
+};
+
 // How a surrogate tier's curve (fe-ann) answered its integration points: part of the curve's
 // provenance, kept with it in the cache.
 struct SurrogateRun {
@@ -128,10 +136,7 @@ struct SurrogateRun {
   // each one's own history (one step per FE step) at which it fell back.
   int fallbacks = 0;
   std::vector<std::int64_t> fallback_point_steps;
-  // Of them, those each of the guard's tests flagged (a point may be flagged by more than one):
-  int fallbacks_beyond_distance = 0;       // the training envelope's distance
-  int fallbacks_beyond_spread = 0;         // the members' spread
-  int fallbacks_below_pressure_floor = 0;  // the pressure floor
+  FallbackFlagCounts fallbacks_flagged;  // of them, those each of the guard's tests flagged
   std::int64_t returns = 0;           // fallen-back points sent back to the network
   std::int64_t unanswered_flags = 0;  // flags the network answered anyway (fallback off)
   int fallback_paths_kept = 0;        // fallen-back points' RVE paths kept as training data

@@ -27,9 +27,10 @@ std::string ManifestFile(const std::string& directory, std::uint64_t generation)
   return directory + "/points." + std::to_string(generation) + ".manifest";
 }
 
-void WriteFileAtomically(const std::string& path, const std::string& bytes) {
+void WriteFileAtomically(const std::string& path, const std::string& bytes, unsigned permissions) {
   const std::string temporary = path + ".tmp";
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC,
+                        static_cast<mode_t>(permissions));
   if (fd < 0) throw std::runtime_error("cannot create " + temporary);
   std::size_t written = 0;
   while (written < bytes.size()) {

@@ -20,8 +20,13 @@ using Handle = std::int64_t;
 std::string PointsFile(const std::string& directory, std::uint64_t generation, int rank);
 std::string ManifestFile(const std::string& directory, std::uint64_t generation);
 
-// Throws std::runtime_error naming the file when it cannot be written in full (disk full).
-void WriteFileAtomically(const std::string& path, const std::string& bytes);
+// Writes `bytes` to a temporary file beside `path`, fsync-s it and renames it to `path`, so that a
+// crash leaves the whole file or the one before. The file is created with `permissions` less the
+// process's umask: 0600, the owner's alone, for a checkpoint; 0666 for a file a user reads as any
+// other (a curve's CSV). Throws std::runtime_error naming the file when it cannot be written in
+// full (disk full).
+void WriteFileAtomically(const std::string& path, const std::string& bytes,
+                         unsigned permissions = 0600);
 // Throws InputError("checkpoint", ...) when the file cannot be read.
 std::string ReadFile(const std::string& path);
 

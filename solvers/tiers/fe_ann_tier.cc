@@ -50,6 +50,17 @@ std::string VersionOf(const FeAnnOptions& options) {
   return version;
 }
 
+// How many of `fallbacks` each of the guard's tests flagged.
+FallbackFlagCounts FlagsOf(const std::vector<ann::FallbackLog::Event>& fallbacks) {
+  FallbackFlagCounts flagged;
+  for (const ann::FallbackLog::Event& event : fallbacks) {
+    flagged.beyond_distance += event.beyond_distance ? 1 : 0;
+    flagged.beyond_spread += event.beyond_spread ? 1 : 0;
+    flagged.below_pressure_floor += event.below_pressure_floor ? 1 : 0;
+  }
+  return flagged;
+}
+
 // A running curve's fallbacks in words, for its job's progress: "12 points fallen back to their
 // RVEs (flagged: distance 12, spread 1), 2 sent back (RVEs 143 s, network 54 s)". The fallbacks
 // are what makes an fe-ann curve long, and which test flagged them says which threshold to look at.
@@ -66,10 +77,7 @@ std::string ProgressNote(const AnnProgress& progress) {
     note = std::to_string(progress.fallbacks) + " points fallen back to their RVEs";
   }
   if (progress.fallbacks > 0) {
-    const std::string flags =
-        FallbackFlagsPhrase(progress.fallbacks_beyond_distance, progress.fallbacks_beyond_spread,
-                            progress.fallbacks_below_pressure_floor);
-    note += " (" + flags + ")";
+    note += " (" + FallbackFlagsPhrase(progress.fallbacks_flagged) + ")";
   }
   if (progress.returns > 0) note += ", " + std::to_string(progress.returns) + " sent back";
   return note + " (" + seconds + ")";
@@ -77,11 +85,11 @@ std::string ProgressNote(const AnnProgress& progress) {
 
 }  // namespace
 
-std::string FallbackFlagsPhrase(int beyond_distance, int beyond_spread, int below_pressure_floor) {
-  std::string phrase = "flagged: distance " + std::to_string(beyond_distance) + ", spread " +
-                       std::to_string(beyond_spread);
-  if (below_pressure_floor > 0) {
-    phrase += ", pressure floor " + std::to_string(below_pressure_floor);
+std::string FallbackFlagsPhrase(const FallbackFlagCounts& flagged) {
+  std::string phrase = "flagged: distance " + std::to_string(flagged.beyond_distance) +
+                       ", spread " + std::to_string(flagged.beyond_spread);
+  if (flagged.below_pressure_floor > 0) {
+    phrase += ", pressure floor " + std::to_string(flagged.below_pressure_floor);
   }
   return phrase;
 }
@@ -254,11 +262,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
         const ann::FallbackLog& log = material->log();
         const std::vector<ann::FallbackLog::Event> fallbacks = log.fallbacks();
         progress.fallbacks = static_cast<int>(fallbacks.size());
-        for (const ann::FallbackLog::Event& event : fallbacks) {
-          progress.fallbacks_beyond_distance += event.beyond_distance ? 1 : 0;
-          progress.fallbacks_beyond_spread += event.beyond_spread ? 1 : 0;
-          progress.fallbacks_below_pressure_floor += event.below_pressure_floor ? 1 : 0;
-        }
+        progress.fallbacks_flagged = FlagsOf(fallbacks);
         progress.returns = log.returns();
         progress.network_seconds = log.network_seconds();
         progress.fallback_seconds = log.fallback_seconds();
@@ -283,12 +287,11 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
   report.model_load_seconds = load_seconds;
   if (material) {
     const ann::FallbackLog& log = material->log();
-    for (const ann::FallbackLog::Event& event : log.fallbacks()) {
+    const std::vector<ann::FallbackLog::Event> fallbacks = log.fallbacks();
+    for (const ann::FallbackLog::Event& event : fallbacks) {
       report.fallback_steps.push_back(event.point_step);
-      report.fallbacks_beyond_distance += event.beyond_distance ? 1 : 0;
-      report.fallbacks_beyond_spread += event.beyond_spread ? 1 : 0;
-      report.fallbacks_below_pressure_floor += event.below_pressure_floor ? 1 : 0;
     }
+    report.fallbacks_flagged = FlagsOf(fallbacks);
     report.fallbacks = static_cast<int>(report.fallback_steps.size());
     report.unanswered_flags = log.unanswered_flags();
     report.network_seconds = log.network_seconds();
@@ -301,9 +304,7 @@ AnnRunReport FeAnnTier::Run(TractionRequest request, const ComputeContext& conte
   run.fe_steps = report.fe_steps;
   run.fallbacks = report.fallbacks;
   run.fallback_point_steps = report.fallback_steps;
-  run.fallbacks_beyond_distance = report.fallbacks_beyond_distance;
-  run.fallbacks_beyond_spread = report.fallbacks_beyond_spread;
-  run.fallbacks_below_pressure_floor = report.fallbacks_below_pressure_floor;
+  run.fallbacks_flagged = report.fallbacks_flagged;
   run.returns = report.returns;
   run.unanswered_flags = report.unanswered_flags;
   run.fallback_paths_kept = fallback_paths ? static_cast<int>(fallback_paths->size()) : 0;

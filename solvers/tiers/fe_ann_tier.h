@@ -77,10 +77,7 @@ struct AnnRunReport : FeDeRunReport {
   // number of points that fell back.
   int fallbacks = 0;
   std::vector<std::int64_t> fallback_steps;
-  // Of the fallbacks, those each of the guard's tests flagged (one may be flagged by several).
-  int fallbacks_beyond_distance = 0;       // the training envelope's distance
-  int fallbacks_beyond_spread = 0;         // the ensemble members' spread
-  int fallbacks_below_pressure_floor = 0;  // the pressure floor
+  FallbackFlagCounts fallbacks_flagged;  // of them, those each of the guard's tests flagged
   std::int64_t unanswered_flags = 0;  // with the fallback off
   double network_seconds = 0;         // the ensemble's batched calls
   std::int64_t network_point_updates = 0;
@@ -98,9 +95,7 @@ struct AnnRunReport : FeDeRunReport {
 struct AnnProgress {
   double fraction = 0;  // of the run's FE steps
   int fallbacks = 0;    // as AnnRunReport's, so far
-  int fallbacks_beyond_distance = 0;  // of them, as AnnRunReport's
-  int fallbacks_beyond_spread = 0;
-  int fallbacks_below_pressure_floor = 0;
+  FallbackFlagCounts fallbacks_flagged;  // of them, as AnnRunReport's
   std::int64_t returns = 0;
   double network_seconds = 0;
   double fallback_seconds = 0;
@@ -109,7 +104,7 @@ using AnnProgressReport = std::function<void(const AnnProgress&)>;
 
 // "flagged: distance 12, spread 3[, pressure floor 1]": how many fallbacks each of the guard's
 // tests flagged (one may be flagged by several), for progress notes and reports.
-std::string FallbackFlagsPhrase(int beyond_distance, int beyond_spread, int below_pressure_floor);
+std::string FallbackFlagsPhrase(const FallbackFlagCounts& flagged);
 
 class FeAnnTier : public TractionTier {
  public:

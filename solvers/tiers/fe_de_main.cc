@@ -41,6 +41,7 @@
 #include "solvers/common/cli_checks.h"
 #include "solvers/common/errors.h"
 #include "solvers/common/units.h"
+#include "solvers/material/checkpoint_files.h"
 #include "solvers/tiers/fe_de_calibration.h"
 #include "solvers/tiers/fe_de_curve_file.h"
 #include "solvers/tiers/fe_de_pace.h"
@@ -380,15 +381,15 @@ int MeasurePace(const CommandLine& line, const tiers::FeDeTier& tier,
   return 0;
 }
 
-// Writes `text` to `path` through a temporary file, so that an interrupted run leaves no partial
-// file there; `option` names the path in the error.
+// Writes `text` to `path` whole (WriteFileAtomically: an interrupted run or a crash leaves no
+// partial file there), readable as the user's other files are; `option` names the path in the
+// error.
 void WriteWhole(const std::string& path, const std::string& text, const char* option) {
-  const std::string temporary = path + ".tmp";
-  std::ofstream out(temporary);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error(std::string("could not write ") + option + " " + path);
-  std::filesystem::rename(temporary, path);
+  try {
+    material::checkpoint::WriteFileAtomically(path, text, 0666);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string(option) + ": " + error.what());
+  }
 }
 
 int Run(const CommandLine& line, int rank) {

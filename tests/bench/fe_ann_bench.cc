@@ -84,9 +84,7 @@ void WriteRecords(const std::string& path, const std::vector<rig::RigSample>& sa
 }
 
 std::string FlagsOf(const tiers::AnnProgress& progress) {
-  return tiers::FallbackFlagsPhrase(progress.fallbacks_beyond_distance,
-                                    progress.fallbacks_beyond_spread,
-                                    progress.fallbacks_below_pressure_floor);
+  return tiers::FallbackFlagsPhrase(progress.fallbacks_flagged);
 }
 
 // Microseconds per point of `evaluate` on a batch of `points`, repeated to about 0.3 s.
@@ -421,9 +419,7 @@ int main(int argc, char** argv) {
           static_cast<long long>(ann.network_point_updates),
           1e6 * ann.network_seconds / std::max<std::int64_t>(1, ann.network_point_updates),
           static_cast<long long>(ann.stress_returns), ann.fallbacks, ann.fallback_seconds,
-          tiers::FallbackFlagsPhrase(ann.fallbacks_beyond_distance, ann.fallbacks_beyond_spread,
-                                     ann.fallbacks_below_pressure_floor)
-              .c_str(),
+          tiers::FallbackFlagsPhrase(ann.fallbacks_flagged).c_str(),
           static_cast<long long>(ann.returns), fallback_paths.size(), ann.model_load_seconds,
           rest_s, PeakRssMb());
       if (fe_de_budget_s > 0 || no_fe_de) {

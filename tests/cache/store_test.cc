@@ -189,9 +189,9 @@ TEST_F(StoreTest, ASurrogateCurvesRunRoundTripsExactly) {
   run.fe_steps = 900;
   run.fallbacks = 3;
   run.fallback_point_steps = {449, 450, 637};
-  run.fallbacks_below_pressure_floor = 2;
-  run.fallbacks_beyond_distance = 1;
-  run.fallbacks_beyond_spread = 3;
+  run.fallbacks_flagged.below_pressure_floor = 2;
+  run.fallbacks_flagged.beyond_distance = 1;
+  run.fallbacks_flagged.beyond_spread = 3;
   run.returns = 1;
   run.unanswered_flags = 7;
   run.fallback_paths_kept = 3;
@@ -209,9 +209,9 @@ TEST_F(StoreTest, ASurrogateCurvesRunRoundTripsExactly) {
   EXPECT_EQ(back.fe_steps, 900);
   EXPECT_EQ(back.fallbacks, 3);
   EXPECT_EQ(back.fallback_point_steps, (std::vector<std::int64_t>{449, 450, 637}));
-  EXPECT_EQ(back.fallbacks_below_pressure_floor, 2);
-  EXPECT_EQ(back.fallbacks_beyond_distance, 1);
-  EXPECT_EQ(back.fallbacks_beyond_spread, 3);
+  EXPECT_EQ(back.fallbacks_flagged.below_pressure_floor, 2);
+  EXPECT_EQ(back.fallbacks_flagged.beyond_distance, 1);
+  EXPECT_EQ(back.fallbacks_flagged.beyond_spread, 3);
   EXPECT_EQ(back.returns, 1);
   EXPECT_EQ(back.unanswered_flags, 7);
   EXPECT_EQ(back.fallback_paths_kept, 3);

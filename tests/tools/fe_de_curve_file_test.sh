@@ -103,6 +103,14 @@ for word in "tier=fe-de-1-tiny" "soil=seed000_sand_rve100" "preset=tiny" "overri
 done
 tail -n +2 "$work/curve.csv" | cmp -s - "$work/straight.out" ||
   fail "the curve file's CSV differs from the printed curve"
+# It and the records are the user's files, as any other they write (not a checkpoint's owner-only
+# mode), and no temporary file is left beside them.
+expected_mode=$(printf '%o' $((0666 & ~$(umask))))
+for file in "$work/curve.csv" "$work/samples.csv"; do
+  mode=$(stat -c %a "$file")
+  [ "$mode" = "$expected_mode" ] || fail "$file has mode $mode, not $expected_mode (umask $(umask))"
+  [ ! -e "$file.tmp" ] || fail "$file.tmp was left behind"
+done
 
 # 5. The bench refuses a file of another rig, or a damaged one, naming the field, before training.
 expect_refusal() {

@@ -451,9 +451,9 @@ TEST_F(FeAnnTierTest, EveryPointFlaggedIsAnsweredByItsRveAndGivesTheFeDeCurve) {
   // Each was flagged by the distance, and none by a floor (none is set). The spread may flag none:
   // at a point's first increment, from rest, the anchored members can agree exactly (measured:
   // 0 of 130).
-  EXPECT_EQ(report.fallbacks_beyond_distance, report.fallbacks);
-  EXPECT_LE(report.fallbacks_beyond_spread, report.fallbacks);
-  EXPECT_EQ(report.fallbacks_below_pressure_floor, 0);
+  EXPECT_EQ(report.fallbacks_flagged.beyond_distance, report.fallbacks);
+  EXPECT_LE(report.fallbacks_flagged.beyond_spread, report.fallbacks);
+  EXPECT_EQ(report.fallbacks_flagged.below_pressure_floor, 0);
   EXPECT_TRUE(std::all_of(report.fallback_steps.begin(), report.fallback_steps.end(),
                           [](std::int64_t step) { return step == 0; }));
   EXPECT_TRUE(SameBits(report.curve, fe_de_->curve)) << "the RVEs' curve differs from fe-de's";
@@ -547,18 +547,18 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   EXPECT_LE(progress.back().network_seconds, report.network_seconds);
   // Which of the guard's tests flagged the fallbacks: with no floor, the distance or the spread
   // flagged each one, so far and in the end.
-  const auto expect_each_flagged = [](int fallbacks, int by_distance, int by_spread, int by_floor) {
-    EXPECT_LE(std::max(by_distance, by_spread), fallbacks);
-    EXPECT_GE(by_distance + by_spread, fallbacks);
-    EXPECT_EQ(by_floor, 0);
+  const auto expect_each_flagged = [](int fallbacks, const FallbackFlagCounts& flagged) {
+    EXPECT_LE(std::max(flagged.beyond_distance, flagged.beyond_spread), fallbacks);
+    EXPECT_GE(flagged.beyond_distance + flagged.beyond_spread, fallbacks);
+    EXPECT_EQ(flagged.below_pressure_floor, 0);
   };
   const AnnProgress& last = progress.back();
-  expect_each_flagged(last.fallbacks, last.fallbacks_beyond_distance, last.fallbacks_beyond_spread,
-                      last.fallbacks_below_pressure_floor);
-  expect_each_flagged(report.fallbacks, report.fallbacks_beyond_distance,
-                      report.fallbacks_beyond_spread, report.fallbacks_below_pressure_floor);
-  EXPECT_LE(progress.back().fallbacks_beyond_distance, report.fallbacks_beyond_distance);
-  EXPECT_LE(progress.back().fallbacks_beyond_spread, report.fallbacks_beyond_spread);
+  expect_each_flagged(last.fallbacks, last.fallbacks_flagged);
+  expect_each_flagged(report.fallbacks, report.fallbacks_flagged);
+  EXPECT_LE(progress.back().fallbacks_flagged.beyond_distance,
+            report.fallbacks_flagged.beyond_distance);
+  EXPECT_LE(progress.back().fallbacks_flagged.beyond_spread,
+            report.fallbacks_flagged.beyond_spread);
   ASSERT_EQ(notes.size(), progress.size());
   EXPECT_EQ(notes.front().rfind("no point fallen back to its RVE (RVEs ", 0), 0u)
       << notes.front();
@@ -568,10 +568,10 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
                                0),
             0u)
       << notes.back();
-  EXPECT_NE(
-      notes.back().find(" (flagged: distance " + std::to_string(last.fallbacks_beyond_distance) +
-                        ", spread " + std::to_string(last.fallbacks_beyond_spread) + ")"),
-      std::string::npos)
+  EXPECT_NE(notes.back().find(" (flagged: distance " +
+                              std::to_string(last.fallbacks_flagged.beyond_distance) + ", spread " +
+                              std::to_string(last.fallbacks_flagged.beyond_spread) + ")"),
+            std::string::npos)
       << notes.back();
   std::cout << "  the last progress note: " << notes.back() << "\n";
   // Each fallen-back point's path on its RVE, from its start to the end of its bin's run.
@@ -589,9 +589,10 @@ TEST_F(FeAnnTierTest, NetworkAnswersNearlyEveryPointAndItsCurveIsComparedWithFeD
   EXPECT_EQ(run.fe_steps, report.fe_steps);
   EXPECT_EQ(run.fallbacks, report.fallbacks);
   EXPECT_EQ(run.fallback_point_steps, report.fallback_steps);
-  EXPECT_EQ(run.fallbacks_beyond_distance, report.fallbacks_beyond_distance);
-  EXPECT_EQ(run.fallbacks_beyond_spread, report.fallbacks_beyond_spread);
-  EXPECT_EQ(run.fallbacks_below_pressure_floor, report.fallbacks_below_pressure_floor);
+  EXPECT_EQ(run.fallbacks_flagged.beyond_distance, report.fallbacks_flagged.beyond_distance);
+  EXPECT_EQ(run.fallbacks_flagged.beyond_spread, report.fallbacks_flagged.beyond_spread);
+  EXPECT_EQ(run.fallbacks_flagged.below_pressure_floor,
+            report.fallbacks_flagged.below_pressure_floor);
   EXPECT_EQ(run.fallback_paths_kept, static_cast<int>(fallback_paths.size()));
   EXPECT_EQ(run.network_point_updates, report.network_point_updates);
   EXPECT_EQ(run.network_seconds, report.network_seconds);
